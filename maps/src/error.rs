@@ -1,0 +1,108 @@
+//! The error type of the `ftmap` crate: one structured variant per way a task, mesh, map
+//! file or computation can fail.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong while reading tasks and meshes, computing maps or reading
+/// map files.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MapError {
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The file does not start with the FT-Map magic bytes.
+    #[error("{}: not an FT-Map file (starts with {found:02x?}, an FT-Map starts with {expected:02x?})", path.display())]
+    NotAMap {
+        /// The file.
+        path: PathBuf,
+        /// The first bytes found.
+        found: Vec<u8>,
+        /// The magic bytes expected.
+        expected: Vec<u8>,
+    },
+    /// The file is an FT-Map of a format version this build cannot read.
+    #[error("{}: FT-Map format version {found} is not supported (this build reads version {supported})", path.display())]
+    UnsupportedVersion {
+        /// The file.
+        path: PathBuf,
+        /// The version in the file.
+        found: u32,
+        /// The version this build reads.
+        supported: u32,
+    },
+    /// The file ends before its declared content does.
+    #[error("{}: truncated: {what} needs {expected} bytes but the file has {got}", path.display())]
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// Which part was cut off.
+        what: &'static str,
+        /// Bytes the file should have.
+        expected: u64,
+        /// Bytes it has.
+        got: u64,
+    },
+    /// The stored checksum does not match the content.
+    #[error("{}: corrupted: checksum stored {stored:08x}, computed {computed:08x}", path.display())]
+    Checksum {
+        /// The file.
+        path: PathBuf,
+        /// The CRC-32 in the file.
+        stored: u32,
+        /// The CRC-32 of the content.
+        computed: u32,
+    },
+    /// The header is unreadable or disagrees with the data.
+    #[error("{}: bad header: {reason}", path.display())]
+    BadHeader {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A task description is missing, unreadable or inconsistent.
+    #[error("task {}: {reason}", path.display())]
+    Task {
+        /// The task file or name.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A mesh file is missing or unreadable.
+    #[error("mesh {}: {reason}", path.display())]
+    Mesh {
+        /// The mesh file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A name that is not one of the twelve DOFs.
+    #[error("unknown DOF `{0}` (expected grip.x .. grip.rz or object.x .. object.rz)")]
+    UnknownDof(String),
+    /// A tolerance-space grid that cannot be built.
+    #[error("invalid grid: {0}")]
+    Grid(String),
+    /// A coordinate list that does not fit the map's grid.
+    #[error("coordinates: expected {expected} values (one per grid axis), got {got}")]
+    Coordinates {
+        /// Axes of the grid.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// The GPU backend could not start or failed.
+    #[error("GPU backend: {0}")]
+    Gpu(String),
+    /// A rendering that does not fit the configuration (e.g. no overlap of the parts).
+    #[error("geometry: {0}")]
+    Geometry(String),
+}
+
+/// Result with [`MapError`].
+pub type Result<T, E = MapError> = std::result::Result<T, E>;

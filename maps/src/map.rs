@@ -1,0 +1,190 @@
+//! The FT-Map itself: a wrench and a contact depth per cell of Omega, with what it was
+//! made from, cell lookup and multilinear interpolation.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{MapError, Result};
+use crate::grid::Grid;
+
+/// Channels stored per cell, in order.
+pub const CHANNELS: [&str; 7] = ["fx", "fy", "fz", "tx", "ty", "tz", "depth"];
+/// SI unit of each channel.
+pub const UNITS: [&str; 7] = ["N", "N", "N", "N.m", "N.m", "N.m", "m"];
+/// Number of channels per cell.
+pub const NCH: usize = CHANNELS.len();
+
+/// Index of a channel by name (`fx` .. `depth`).
+pub fn channel_index(name: &str) -> Result<usize> {
+    CHANNELS
+        .iter()
+        .position(|c| *c == name)
+        .ok_or_else(|| MapError::Grid(format!("unknown channel `{name}` (one of {})", CHANNELS.join(", "))))
+}
+
+/// How the wrench of a contact configuration was obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum WrenchModel {
+    /// The paper's: force from contact normals and friction (Eq. 2), torque 0 when the
+    /// sensor axis meets the contact hull, else PK x F.
+    Paper,
+    /// Pressure spread evenly over the contact area: torque = (centroid - sensor) x F.
+    Centroid,
+    /// Scanned by contact motions in a (simulated) work cell.
+    Measured,
+}
+
+/// A source mesh of a map and its SHA-256.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SourceMesh {
+    /// `A` (active, gripped) or `B` (passive, fixed).
+    pub role: String,
+    /// File name as given in the task.
+    pub file: String,
+    /// Hex SHA-256 of the file's bytes.
+    pub sha256: String,
+}
+
+/// What a map was computed from and under which conventions.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MapMeta {
+    /// Task name.
+    pub task: String,
+    /// Wrench model used.
+    pub model: WrenchModel,
+    /// Approach vector a in the nominal task frame (unit).
+    pub approach: [f64; 3],
+    /// Imposed force along a (N).
+    pub force: f64,
+    /// Friction coefficient.
+    pub friction: f64,
+    /// Sensor origin in the nominal task frame (m); torques are about it.
+    pub sensor_origin: [f64; 3],
+    /// Pixel size of the depth maps (m); 0 for measured maps.
+    pub pixel: f64,
+    /// Source meshes and their hashes.
+    pub sources: Vec<SourceMesh>,
+    /// Program and version that wrote the map.
+    pub generator: String,
+}
+
+/// A Force Torque Map: `NCH` values per cell of a grid, cell-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FtMap {
+    grid: Grid,
+    meta: MapMeta,
+    data: Vec<f32>,
+}
+
+impl FtMap {
+    /// A map of zeros over `grid`.
+    pub fn zeros(grid: Grid, meta: MapMeta) -> Self {
+        let data = vec![0.0; grid.cells() * NCH];
+        Self { grid, meta, data }
+    }
+
+    /// A map from existing cell-major data; errors when its length does not fit the grid.
+    pub fn from_data(grid: Grid, meta: MapMeta, data: Vec<f32>) -> Result<Self> {
+        let want = grid.cells() * NCH;
+        if data.len() != want {
+            return Err(MapError::Grid(format!("data has {} values, grid needs {want}", data.len())));
+        }
+        Ok(Self { grid, meta, data })
+    }
+
+    /// The grid over Omega.
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    /// What the map was made from.
+    pub fn meta(&self) -> &MapMeta {
+        &self.meta
+    }
+
+    /// All values, `NCH` per cell.
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+
+    /// All values, mutable.
+    pub fn data_mut(&mut self) -> &mut [f32] {
+        &mut self.data
+    }
+
+    /// The channels of cell `cell`.
+    pub fn cell(&self, cell: usize) -> &[f32; NCH] {
+        self.data[cell * NCH..(cell + 1) * NCH].try_into().expect("NCH values per cell")
+    }
+
+    /// The channels of cell `cell`, mutable.
+    pub fn cell_mut(&mut self, cell: usize) -> &mut [f32; NCH] {
+        (&mut self.data[cell * NCH..(cell + 1) * NCH]).try_into().expect("NCH values per cell")
+    }
+
+    /// The channels of the cell nearest to `coords` (one coordinate per grid axis), O(1).
+    pub fn nearest(&self, coords: &[f64]) -> Result<&[f32; NCH]> {
+        Ok(self.cell(self.grid.nearest(coords)?))
+    }
+
+    /// Multilinear interpolation of all channels at `coords` (clamped into the grid).
+    pub fn interpolate(&self, coords: &[f64]) -> Result<[f64; NCH]> {
+        self.grid.check_len(coords)?;
+        let mut out = [0.0; NCH];
+        self.grid.for_each_corner(coords, |cell, w| {
+            for (o, v) in out.iter_mut().zip(self.cell(cell)) {
+                *o += w * f64::from(*v);
+            }
+        });
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::dof::{Axis, Dof, Pose};
+    use crate::grid::GridAxis;
+
+    /// A small map whose channels are known functions of the coordinates.
+    pub(crate) fn sample_map() -> FtMap {
+        let x = GridAxis { dof: Dof::new(Pose::Object, Axis::X), min: -2e-3, step: 1e-3, count: 5 };
+        let y = GridAxis { dof: Dof::new(Pose::Object, Axis::Y), min: -1e-3, step: 1e-3, count: 3 };
+        let grid = Grid::new(vec![x, y]).unwrap();
+        let meta = MapMeta {
+            task: "sample".into(),
+            model: WrenchModel::Centroid,
+            approach: [0.0, 0.0, -1.0],
+            force: 50.0,
+            friction: 0.3,
+            sensor_origin: [0.0, 0.0, 0.05],
+            pixel: 1e-4,
+            sources: vec![SourceMesh { role: "A".into(), file: "a.stl".into(), sha256: "00".into() }],
+            generator: "test".into(),
+        };
+        let mut map = FtMap::zeros(grid, meta);
+        for cell in 0..map.grid().cells() {
+            let c = map.grid().coords(cell);
+            let v = map.cell_mut(cell);
+            v[3] = (1000.0 * c[1]) as f32;
+            v[4] = (-1000.0 * c[0]) as f32;
+            v[2] = 50.0;
+            v[6] = (c[0] * c[0]) as f32;
+        }
+        map
+    }
+
+    #[test]
+    fn interpolation_is_exact_on_cells_and_linear_between() {
+        let map = sample_map();
+        let at = map.interpolate(&[1e-3, -1e-3]).unwrap();
+        assert!((at[3] - (-1.0)).abs() < 1e-6 && (at[4] - (-1.0)).abs() < 1e-6);
+        let mid = map.interpolate(&[0.5e-3, 0.25e-3]).unwrap();
+        assert!((mid[3] - 0.25).abs() < 1e-6, "{mid:?}");
+        assert!((mid[4] + 0.5).abs() < 1e-6, "{mid:?}");
+        // x^2 between samples 0 and 1e-3 interpolates linearly: 0.5e-6 at 0.5e-3.
+        assert!((mid[6] - 0.5e-6).abs() < 1e-12);
+        assert!(map.interpolate(&[0.0]).is_err());
+        assert_eq!(map.nearest(&[0.4e-3, 0.6e-3]).unwrap()[3], 1.0);
+    }
+}
