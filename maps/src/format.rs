@@ -37,16 +37,25 @@ pub struct Header {
     pub units: Vec<String>,
     /// What the map was made from.
     pub meta: MapMeta,
+    /// `[i, n]` when the file holds only shard i of n (cells of other shards are NaN).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<[usize; 2]>,
 }
 
 /// Encodes a map into the bytes of a file.
 pub fn to_bytes(map: &FtMap) -> Vec<u8> {
+    encode(map, None)
+}
+
+/// Encodes a map, or shard `[i, n]` of one, into the bytes of a file.
+pub fn encode(map: &FtMap, shard: Option<[usize; 2]>) -> Vec<u8> {
     let header = Header {
         kind: KIND.into(),
         grid: map.grid().clone(),
         channels: CHANNELS.iter().map(|s| s.to_string()).collect(),
         units: UNITS.iter().map(|s| s.to_string()).collect(),
         meta: map.meta().clone(),
+        shard,
     };
     let json = serde_json::to_vec(&header).expect("header serializes");
     let mut out = Vec::with_capacity(20 + json.len() + map.data().len() * 4);
@@ -64,23 +73,46 @@ pub fn to_bytes(map: &FtMap) -> Vec<u8> {
 
 /// Writes a map file (through a temporary file, so a failed write leaves no half file).
 pub fn save(map: &FtMap, path: &Path) -> Result<()> {
+    write_bytes(&to_bytes(map), path)
+}
+
+/// Writes bytes to `path` through a temporary file beside it.
+pub fn write_bytes(bytes: &[u8], path: &Path) -> Result<()> {
     let io = |source| MapError::Io { path: path.to_owned(), source };
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io)?;
     }
     let tmp = path.with_extension("ftmap.partial");
-    std::fs::write(&tmp, to_bytes(map)).map_err(io)?;
+    std::fs::write(&tmp, bytes).map_err(io)?;
     std::fs::rename(&tmp, path).map_err(io)
 }
 
-/// Reads a map file, refusing foreign, truncated, corrupted and wrong-version files.
+/// Reads a complete map file, refusing foreign, truncated, corrupted, wrong-version and
+/// shard files.
 pub fn load(path: &Path) -> Result<FtMap> {
     let bytes = std::fs::read(path).map_err(|source| MapError::Io { path: path.to_owned(), source })?;
     from_bytes(&bytes, path)
 }
 
-/// Decodes the bytes of a map file; `path` names the file in errors.
+/// Decodes the bytes of a complete map file; `path` names the file in errors.
 pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<FtMap> {
+    match decode(bytes, path)? {
+        (map, None) => Ok(map),
+        (_, Some([i, n])) => Err(MapError::BadHeader {
+            path: path.to_owned(),
+            reason: format!("this is shard {i} of {n}, not a whole map: merge the shards first (`ftmap merge`)"),
+        }),
+    }
+}
+
+/// Reads a map or shard file: the map and, for a shard, `[i, n]`.
+pub fn load_any(path: &Path) -> Result<(FtMap, Option<[usize; 2]>)> {
+    let bytes = std::fs::read(path).map_err(|source| MapError::Io { path: path.to_owned(), source })?;
+    decode(&bytes, path)
+}
+
+/// Decodes the bytes of a map or shard file.
+pub fn decode(bytes: &[u8], path: &Path) -> Result<(FtMap, Option<[usize; 2]>)> {
     let p = || path.to_owned();
     let truncated = |what, expected: usize| MapError::Truncated {
         path: p(),
@@ -133,7 +165,8 @@ pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<FtMap> {
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
         .collect();
-    FtMap::from_data(header.grid, header.meta, data)
+    let map = FtMap::from_data(header.grid, header.meta, data).map_err(|e| bad(e.to_string()))?;
+    Ok((map, header.shard))
 }
 
 #[cfg(test)]

@@ -3,12 +3,20 @@
 //! z-buffer depth backends (CPU and wgpu), contacts, wrench models, the map type with its
 //! O(1) lookup and its file format.
 
+pub mod cad;
+pub mod cpu;
+pub mod depth;
 pub mod dof;
 pub mod error;
 pub mod format;
+pub mod generate;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod grid;
 pub mod map;
+pub mod mesh;
 pub mod task;
+pub mod wrench;
 
 pub use dof::{Axis, Dof, Pose};
 pub use error::{MapError, Result};

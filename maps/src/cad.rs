@@ -1,0 +1,1 @@
+//! Parametric CAD solids of the tasks (being written).

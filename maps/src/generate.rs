@@ -1,0 +1,256 @@
+//! The FT-Map computation (paper, section II-B): for every rotation cell of Omega, depth
+//! images of A along a and of B against a; every translation of B across a is a
+//! whole-pixel shift of B's image, translations along a only move the contact depth, and
+//! grip translations only move the sensor origin. The contacts of each configuration are
+//! reduced by the backend and turned into a wrench by the chosen model.
+
+use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use rayon::prelude::*;
+
+use crate::depth::{DepthBackend, PixelWindow, RenderJob, Shift, Surface, View};
+use crate::dof::{Axis, Pose};
+use crate::error::{MapError, Result};
+use crate::grid::{Grid, MAX_AXES};
+use crate::map::{FtMap, MapMeta, NCH, SourceMesh, WrenchModel};
+use crate::mesh::Mesh;
+use crate::task::Task;
+use crate::wrench::WrenchSetup;
+
+/// Choices of a map computation.
+#[derive(Debug, Clone, Copy)]
+pub struct GenerateOptions {
+    /// The wrench model.
+    pub model: WrenchModel,
+    /// `Some([i, n])`: compute only rotation cells r with r % n == i (cells of the other
+    /// shards stay NaN; `merge` joins the shards).
+    pub shard: Option<[usize; 2]>,
+}
+
+impl Default for GenerateOptions {
+    fn default() -> Self {
+        Self { model: WrenchModel::Centroid, shard: None }
+    }
+}
+
+/// What kind of work an axis of Omega causes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    /// A rotation: needs new depth images.
+    Render,
+    /// A translation of the object: a shift of B's image (across a) or of the depth (along a).
+    Shift,
+    /// A translation of the grip: moves the sensor origin only.
+    Sensor,
+}
+
+fn role(pose: Pose, axis: Axis) -> Role {
+    match (pose, axis.is_rotation()) {
+        (_, true) => Role::Render,
+        (Pose::Object, false) => Role::Shift,
+        (Pose::Grip, false) => Role::Sensor,
+    }
+}
+
+/// Enumerates the sub-grid of some axes: the per-axis sample indices of its `k`-th cell.
+struct SubGrid {
+    axes: Vec<usize>,
+    counts: Vec<usize>,
+    len: usize,
+}
+
+impl SubGrid {
+    fn new(grid: &Grid, pick: impl Fn(Role) -> bool) -> Self {
+        let axes: Vec<usize> =
+            (0..grid.ndim()).filter(|&k| pick(role(grid.axes()[k].dof.pose, grid.axes()[k].dof.axis))).collect();
+        let counts: Vec<usize> = axes.iter().map(|&k| grid.axes()[k].count).collect();
+        let len = counts.iter().product();
+        Self { axes, counts, len }
+    }
+
+    /// Writes the sample indices of sub-cell `k` into the full index vector `idx`.
+    fn fill(&self, mut k: usize, idx: &mut [usize]) {
+        for (&axis, &count) in self.axes.iter().zip(&self.counts).rev() {
+            idx[axis] = k % count;
+            k /= count;
+        }
+    }
+}
+
+/// The twelve pose values (grip x..rz, object x..rz) of a cell.
+fn pose_values(grid: &Grid, idx: &[usize]) -> [f64; 12] {
+    let mut v = [0.0; 12];
+    for (k, a) in grid.axes().iter().enumerate() {
+        v[a.dof.index()] = a.value(idx[k]);
+    }
+    v
+}
+
+/// A rotation from three rotation-vector components.
+fn rotation(r: &[f64]) -> Rotation3<f64> {
+    Rotation3::new(Vector3::new(r[0], r[1], r[2]))
+}
+
+/// Computes the FT-Map of `task` with `backend`; `progress` is called with the number of
+/// configurations finished since its last call.
+pub fn generate(
+    task: &Task,
+    backend: &dyn DepthBackend,
+    opts: &GenerateOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<FtMap> {
+    let mesh_a = Mesh::load(&task.part_a.mesh)?;
+    let mesh_b = Mesh::load(&task.part_b.mesh)?;
+    generate_with(task, &mesh_a, &mesh_b, backend, opts, progress)
+}
+
+/// Computes the FT-Map of `task` for given meshes of A and B (instead of its mesh files).
+pub fn generate_with(
+    task: &Task,
+    mesh_a: &Mesh,
+    mesh_b: &Mesh,
+    backend: &dyn DepthBackend,
+    opts: &GenerateOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<FtMap> {
+    let grid = task.grid()?;
+    let meta = MapMeta {
+        task: task.name.clone(),
+        model: opts.model,
+        approach: task.contact.approach,
+        force: task.contact.force,
+        friction: task.contact.friction,
+        sensor_origin: task.contact.sensor_origin,
+        pixel: task.depth.pixel,
+        sources: [("A", mesh_a, &task.part_a.mesh), ("B", mesh_b, &task.part_b.mesh)]
+            .into_iter()
+            .map(|(role, m, p)| SourceMesh {
+                role: role.into(),
+                file: p.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
+                sha256: m.sha256.clone(),
+            })
+            .collect(),
+        generator: format!("ftmap {} ({})", env!("CARGO_PKG_VERSION"), backend.name()),
+    };
+    let mut map = FtMap::zeros(grid.clone(), meta);
+    if let Some([i, n]) = opts.shard {
+        if n == 0 || i >= n {
+            return Err(MapError::Grid(format!("shard {i}/{n}: need n >= 1 and 0 <= i < n")));
+        }
+        map.data_mut().fill(f32::NAN);
+    }
+    let render_axes = SubGrid::new(&grid, |r| r == Role::Render);
+    let other_axes = SubGrid::new(&grid, |r| r != Role::Render);
+    let [shard_i, shard_n] = opts.shard.unwrap_or([0, 1]);
+    let ctx = Context { task, backend, grid: &grid, mesh_a, mesh_b, model: opts.model };
+    for rot_cell in (0..render_axes.len).filter(|r| r % shard_n == shard_i) {
+        let mut idx = [0usize; MAX_AXES];
+        render_axes.fill(rot_cell, &mut idx);
+        let cells = ctx.rotation_cell(&idx, &other_axes, progress)?;
+        for (cell, values) in cells {
+            *map.cell_mut(cell) = values;
+        }
+    }
+    Ok(map)
+}
+
+/// What every rotation cell of one computation shares.
+struct Context<'a> {
+    task: &'a Task,
+    backend: &'a dyn DepthBackend,
+    grid: &'a Grid,
+    mesh_a: &'a Mesh,
+    mesh_b: &'a Mesh,
+    model: WrenchModel,
+}
+
+impl Context<'_> {
+    /// All cells sharing the rotations in `rot_idx`: (flat cell, channels).
+    fn rotation_cell(
+        &self,
+        rot_idx: &[usize; MAX_AXES],
+        others: &SubGrid,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Vec<(usize, [f32; NCH])>> {
+        let pixel = self.task.depth.pixel;
+        let pose = pose_values(self.grid, rot_idx);
+        let r1 = rotation(&pose[3..6]);
+        let r2 = rotation(&pose[9..12]);
+        let a0 = Vector3::from(self.task.contact.approach);
+        let view = View::along(r1.inverse() * a0);
+
+        // Every other cell: its object translation as a shift and depth offset, its grip translation.
+        let cells: Vec<([usize; MAX_AXES], Shift, f64, Vector3<f64>)> = (0..others.len)
+            .map(|k| {
+                let mut idx = *rot_idx;
+                others.fill(k, &mut idx);
+                let v = pose_values(self.grid, &idx);
+                let [tu, tv, tw] = view.project(&Point3::new(v[6], v[7], v[8]));
+                let shift = Shift { du: (tu / pixel).round() as i64, dv: (tv / pixel).round() as i64 };
+                (idx, shift, tw, Vector3::new(v[0], v[1], v[2]))
+            })
+            .collect();
+        let mut shifts: Vec<Shift> = cells.iter().map(|c| c.1).collect();
+        shifts.sort_by_key(|s| (s.du, s.dv));
+        shifts.dedup();
+        let reach_u = shifts.iter().map(|s| s.du.abs()).max().unwrap_or(0);
+        let reach_v = shifts.iter().map(|s| s.dv.abs()).max().unwrap_or(0);
+
+        let bounds = |m: &Mesh, iso: &Isometry3<f64>| {
+            let mut b = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+            for p in &m.vertices {
+                let [u, v, _] = view.project(&(iso * p));
+                b = [b[0].min(u), b[1].max(u), b[2].min(v), b[3].max(v)];
+            }
+            b
+        };
+        let a_pose = Isometry3::identity();
+        let b_pose = Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_rotation_matrix(&r2));
+        let [u0, u1, v0, v1] = bounds(self.mesh_a, &a_pose);
+        let a_win = PixelWindow::covering(u0, u1, v0, v1, pixel, 1);
+        let b_win = PixelWindow {
+            i0: a_win.i0 - reach_u,
+            j0: a_win.j0 - reach_v,
+            width: a_win.width + 2 * reach_u as usize,
+            height: a_win.height + 2 * reach_v as usize,
+        };
+        let job = |mesh, pose, surface, window| RenderJob { mesh, pose, view, surface, window, pixel };
+        let a_img = self.backend.render(&job(self.mesh_a, a_pose, Surface::Bottom, a_win))?;
+        let b_img = self.backend.render(&job(self.mesh_b, b_pose, Surface::Top, b_win))?;
+        let b_normals: Vec<[f32; 3]> = (0..self.mesh_b.faces.len())
+            .map(|t| {
+                let n = r2 * self.mesh_b.normal(t);
+                [n.dot(&view.u) as f32, n.dot(&view.v) as f32, n.dot(&view.w) as f32]
+            })
+            .collect();
+        let summaries = self.backend.contacts(&a_img, &b_img, &b_normals, &shifts, self.task.depth.tolerance as f32)?;
+
+        let setup = WrenchSetup {
+            view,
+            origin: (a_win.i0, a_win.j0),
+            pixel,
+            force: self.task.contact.force,
+            friction: self.task.contact.friction,
+        };
+        let s0 = Point3::from(self.task.contact.sensor_origin);
+        let out = cells
+            .par_iter()
+            .map(|(idx, shift, tw, t1)| {
+                let k = shifts.binary_search_by_key(&(shift.du, shift.dv), |s| (s.du, s.dv)).expect("every shift is listed");
+                let c = &summaries[k];
+                let sensor = Point3::from(r1.inverse() * (s0 - t1).coords);
+                let cell = self.grid.flat(&idx[..self.grid.ndim()]);
+                let w = setup.wrench(c, self.model, &sensor).ok_or_else(|| {
+                    MapError::Geometry(format!(
+                        "part A misses part B at cell {:?}: enlarge part B or shrink Omega",
+                        self.grid.coords(cell)
+                    ))
+                })?;
+                let (f, t) = (r1 * w.force, r1 * w.torque);
+                let depth = tw - f64::from(c.gap);
+                Ok((cell, [f.x, f.y, f.z, t.x, t.y, t.z, depth].map(|x| x as f32)))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        progress(out.len() as u64);
+        Ok(out)
+    }
+}
