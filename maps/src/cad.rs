@@ -1,1 +1,1240 @@
-//! Parametric CAD solids of the tasks (being written).
+//! Parametric CAD solids of the assembly tasks (the paper's Fig. 7). A task's `[geometry]`
+//! table in its `task.toml` gives the dimensions (m); from them the two parts are built as
+//! closed, outward-facing (counter-clockwise seen from outside) triangle meshes and written
+//! as binary STL next to the task file.
+//!
+//! Frames: part A (active, gripped) lies in the task frame: origin at its tip on the part
+//! axis, +z up along the part, the part in z >= 0, approach a = (0, 0, -1). Part B (passive,
+//! fixed) lies in the goal frame: origin where A's origin sits when fully mated, +z up.
+//!
+//! Circles are regular polygons with `segments` vertices on the nominal radius, the first at
+//! angle 0; their flats lie r (1 - cos(pi / segments)) inside the circle: 0.38 µm at r = 5 mm
+//! and 0.83 µm at r = 11 mm for 256 segments. A peg and its hole share the vertex angles, so
+//! the nominal clearance holds at the vertices, and (r_hole - r_peg) cos(pi / segments) across
+//! the flats.
+
+use std::f64::consts::{PI, TAU};
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::error::{MapError, Result};
+
+/// The dimensions of a task's two parts, the `[geometry]` table of its task file (m).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Geometry {
+    /// A round peg (A, `peg.stl`) into a blind round hole of a block (B, `block.stl`).
+    RoundPeg {
+        /// Radius of the peg (m).
+        peg_radius: f64,
+        /// Length of the peg (m).
+        peg_length: f64,
+        /// Radius of the hole (m).
+        hole_radius: f64,
+        /// Depth of the hole (m); the block's top is at z = hole_depth.
+        hole_depth: f64,
+        /// Block size x, y, z (m), centred on the hole's axis.
+        block: [f64; 3],
+        /// Vertices per circle.
+        segments: u32,
+    },
+    /// An octagonal peg (A, `peg.stl`) into a blind octagonal hole (B, `block.stl`), flats
+    /// facing +-x and +-y.
+    OctagonPeg {
+        /// Distance between opposite flats of the peg (m).
+        peg_across_flats: f64,
+        /// Distance between opposite flats of the hole (m).
+        hole_across_flats: f64,
+        /// Length of the peg (m).
+        peg_length: f64,
+        /// Depth of the hole (m); the block's top is at z = hole_depth.
+        hole_depth: f64,
+        /// Block size x, y, z (m), centred on the hole's axis.
+        block: [f64; 3],
+    },
+    /// A spur gear wheel with a bore (A, `gear.stl`) onto a shaft standing on a round base
+    /// (B, `shaft.stl`); the teeth are trapezoids, the first centred on +x.
+    GearOnShaft {
+        /// Number of teeth.
+        teeth: u32,
+        /// Radius of the tooth tips (m).
+        tip_radius: f64,
+        /// Radius of the tooth roots (m).
+        root_radius: f64,
+        /// Width of a tooth at the tip circle as a fraction of the pitch angle.
+        tooth_tip_fraction: f64,
+        /// Width of a tooth at the root circle as a fraction of the pitch angle.
+        tooth_root_fraction: f64,
+        /// Radius of the gear's bore (m).
+        bore_radius: f64,
+        /// Thickness of the gear (m).
+        thickness: f64,
+        /// Radius of the shaft (m).
+        shaft_radius: f64,
+        /// Height of the shaft above the base (m).
+        shaft_length: f64,
+        /// Radius of the base cylinder (m).
+        base_radius: f64,
+        /// Height of the base cylinder (m); its top is at z = 0.
+        base_height: f64,
+        /// Vertices per circle.
+        segments: u32,
+    },
+    /// A housing block with a through bore (A, `housing.stl`) onto a bearing seat standing on
+    /// a base plate (B, `seat.stl`).
+    BearingHousing {
+        /// Housing block size x, y, z (m), centred on the bore's axis.
+        housing: [f64; 3],
+        /// Radius of the housing's bore (m).
+        bore_radius: f64,
+        /// Radius of the seat cylinder (m).
+        seat_radius: f64,
+        /// Height of the seat above the plate (m).
+        seat_height: f64,
+        /// Base plate size x, y, z (m), centred on the seat's axis; its top is at z = 0.
+        plate: [f64; 3],
+        /// Vertices per circle.
+        segments: u32,
+    },
+}
+
+/// Which part of the task a mesh is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// The active, gripped part, in the task frame.
+    A,
+    /// The passive, fixed part, in the goal frame.
+    B,
+}
+
+/// One generated part: the file it is written to, its role and its triangles (m).
+#[derive(Debug, Clone)]
+pub struct NamedMesh {
+    /// File name next to `task.toml`, e.g. `peg.stl`.
+    pub file: &'static str,
+    /// Part A or part B.
+    pub role: Role,
+    /// Triangles, counter-clockwise seen from outside.
+    pub triangles: Vec<[[f32; 3]; 3]>,
+}
+
+impl Geometry {
+    /// Checks that the dimensions describe parts that exist and fit; the reason if not.
+    pub fn check(&self) -> std::result::Result<(), String> {
+        let positive = |pairs: &[(&str, f64)]| {
+            pairs.iter().try_for_each(|&(name, v)| {
+                if v > 0.0 && v.is_finite() {
+                    Ok(())
+                } else {
+                    Err(format!("{name} = {v} must be > 0"))
+                }
+            })
+        };
+        let less = |(a, va): (&str, f64), (b, vb): (&str, f64)| {
+            if va < vb {
+                Ok(())
+            } else {
+                Err(format!("{a} = {va} must be less than {b} = {vb}"))
+            }
+        };
+        let circles = |n: u32| {
+            if n >= 8 && n.is_multiple_of(4) {
+                Ok(())
+            } else {
+                Err(format!("segments = {n} must be a multiple of 4, >= 8"))
+            }
+        };
+        match *self {
+            Self::RoundPeg {
+                peg_radius,
+                peg_length,
+                hole_radius,
+                hole_depth,
+                block,
+                segments,
+            } => {
+                positive(&[
+                    ("peg_radius", peg_radius),
+                    ("peg_length", peg_length),
+                    ("hole_depth", hole_depth),
+                ])?;
+                positive(&[
+                    ("block x", block[0]),
+                    ("block y", block[1]),
+                    ("block z", block[2]),
+                ])?;
+                less(("peg_radius", peg_radius), ("hole_radius", hole_radius))?;
+                less(
+                    ("hole_radius", hole_radius),
+                    (
+                        "half the block's smaller side",
+                        block[0].min(block[1]) / 2.0,
+                    ),
+                )?;
+                less(("hole_depth", hole_depth), ("block z", block[2]))?;
+                circles(segments)
+            }
+            Self::OctagonPeg {
+                peg_across_flats,
+                hole_across_flats,
+                peg_length,
+                hole_depth,
+                block,
+            } => {
+                positive(&[
+                    ("peg_across_flats", peg_across_flats),
+                    ("peg_length", peg_length),
+                    ("hole_depth", hole_depth),
+                ])?;
+                positive(&[
+                    ("block x", block[0]),
+                    ("block y", block[1]),
+                    ("block z", block[2]),
+                ])?;
+                less(
+                    ("peg_across_flats", peg_across_flats),
+                    ("hole_across_flats", hole_across_flats),
+                )?;
+                let corner = hole_across_flats / 2.0 / (PI / 8.0).cos();
+                less(
+                    ("the hole's corner radius", corner),
+                    (
+                        "half the block's smaller side",
+                        block[0].min(block[1]) / 2.0,
+                    ),
+                )?;
+                less(("hole_depth", hole_depth), ("block z", block[2]))
+            }
+            Self::GearOnShaft {
+                teeth,
+                tip_radius,
+                root_radius,
+                tooth_tip_fraction,
+                tooth_root_fraction,
+                bore_radius,
+                thickness,
+                shaft_radius,
+                shaft_length,
+                base_radius,
+                base_height,
+                segments,
+            } => {
+                positive(&[
+                    ("shaft_radius", shaft_radius),
+                    ("thickness", thickness),
+                    ("tooth_tip_fraction", tooth_tip_fraction),
+                ])?;
+                positive(&[("shaft_length", shaft_length), ("base_height", base_height)])?;
+                less(("shaft_radius", shaft_radius), ("bore_radius", bore_radius))?;
+                less(("bore_radius", bore_radius), ("root_radius", root_radius))?;
+                less(("root_radius", root_radius), ("tip_radius", tip_radius))?;
+                less(
+                    ("tooth_tip_fraction", tooth_tip_fraction),
+                    ("tooth_root_fraction", tooth_root_fraction),
+                )?;
+                less(("tooth_root_fraction", tooth_root_fraction), ("1", 1.0))?;
+                less(("shaft_radius", shaft_radius), ("base_radius", base_radius))?;
+                if teeth < 3 {
+                    return Err(format!("teeth = {teeth} must be >= 3"));
+                }
+                circles(segments)
+            }
+            Self::BearingHousing {
+                housing,
+                bore_radius,
+                seat_radius,
+                seat_height,
+                plate,
+                segments,
+            } => {
+                positive(&[
+                    ("housing x", housing[0]),
+                    ("housing y", housing[1]),
+                    ("housing z", housing[2]),
+                ])?;
+                positive(&[
+                    ("plate x", plate[0]),
+                    ("plate y", plate[1]),
+                    ("plate z", plate[2]),
+                ])?;
+                positive(&[("seat_radius", seat_radius), ("seat_height", seat_height)])?;
+                less(("seat_radius", seat_radius), ("bore_radius", bore_radius))?;
+                less(
+                    ("bore_radius", bore_radius),
+                    (
+                        "half the housing's smaller side",
+                        housing[0].min(housing[1]) / 2.0,
+                    ),
+                )?;
+                less(
+                    ("seat_radius", seat_radius),
+                    (
+                        "half the plate's smaller side",
+                        plate[0].min(plate[1]) / 2.0,
+                    ),
+                )?;
+                circles(segments)
+            }
+        }
+    }
+}
+
+/// Reads and checks the `[geometry]` table of a task file.
+pub fn geometry_of(task_toml: &Path) -> Result<Geometry> {
+    #[derive(Deserialize)]
+    struct WithGeometry {
+        geometry: Option<Geometry>,
+    }
+    let err = |reason: String| MapError::Task {
+        path: task_toml.to_owned(),
+        reason,
+    };
+    let text = std::fs::read_to_string(task_toml).map_err(|e| err(e.to_string()))?;
+    let file: WithGeometry = toml::from_str(&text).map_err(|e| err(format!("[geometry]: {e}")))?;
+    let geometry = file
+        .geometry
+        .ok_or_else(|| err("no [geometry] table: its meshes are not generated".into()))?;
+    geometry
+        .check()
+        .map_err(|reason| err(format!("[geometry]: {reason}")))?;
+    Ok(geometry)
+}
+
+/// The task folders under `root` whose `task.toml` has a `[geometry]` table, sorted.
+pub fn task_dirs_with_geometry(root: &Path) -> Result<Vec<PathBuf>> {
+    let entries = std::fs::read_dir(root).map_err(|source| MapError::Io {
+        path: root.to_owned(),
+        source,
+    })?;
+    let mut dirs = Vec::new();
+    for entry in entries {
+        let dir = entry
+            .map_err(|source| MapError::Io {
+                path: root.to_owned(),
+                source,
+            })?
+            .path();
+        let toml_path = dir.join("task.toml");
+        let Ok(text) = std::fs::read_to_string(&toml_path) else {
+            continue;
+        };
+        let table: toml::Table = toml::from_str(&text).map_err(|e| MapError::Task {
+            path: toml_path.clone(),
+            reason: e.to_string(),
+        })?;
+        if table.contains_key("geometry") {
+            dirs.push(dir);
+        }
+    }
+    dirs.sort();
+    Ok(dirs)
+}
+
+/// Builds the two parts of a task.
+pub fn meshes(g: &Geometry) -> Vec<NamedMesh> {
+    let named = |file, role, triangles: Vec<Tri>| NamedMesh {
+        file,
+        role,
+        triangles: to_f32(&triangles),
+    };
+    match *g {
+        Geometry::RoundPeg {
+            peg_radius,
+            peg_length,
+            hole_radius,
+            hole_depth,
+            block,
+            segments,
+        } => {
+            let (peg, hole) = (
+                polygon(peg_radius, segments, 0.0),
+                polygon(hole_radius, segments, 0.0),
+            );
+            vec![
+                named("peg.stl", Role::A, prism(&peg, None, 0.0, peg_length)),
+                named(
+                    "block.stl",
+                    Role::B,
+                    pocket(&rect(block), &hole, hole_depth - block[2], 0.0, hole_depth),
+                ),
+            ]
+        }
+        Geometry::OctagonPeg {
+            peg_across_flats,
+            hole_across_flats,
+            peg_length,
+            hole_depth,
+            block,
+        } => {
+            let octagon = |across: f64| polygon(across / 2.0 / (PI / 8.0).cos(), 8, PI / 8.0);
+            vec![
+                named(
+                    "peg.stl",
+                    Role::A,
+                    prism(&octagon(peg_across_flats), None, 0.0, peg_length),
+                ),
+                named(
+                    "block.stl",
+                    Role::B,
+                    pocket(
+                        &rect(block),
+                        &octagon(hole_across_flats),
+                        hole_depth - block[2],
+                        0.0,
+                        hole_depth,
+                    ),
+                ),
+            ]
+        }
+        Geometry::GearOnShaft {
+            teeth,
+            tip_radius,
+            root_radius,
+            tooth_tip_fraction,
+            tooth_root_fraction,
+            bore_radius,
+            thickness,
+            shaft_radius,
+            shaft_length,
+            base_radius,
+            base_height,
+            segments,
+        } => {
+            let wheel = gear(
+                teeth,
+                tip_radius,
+                root_radius,
+                tooth_tip_fraction,
+                tooth_root_fraction,
+            );
+            let bore = polygon(bore_radius, segments, 0.0);
+            let (base, shaft) = (
+                polygon(base_radius, segments, 0.0),
+                polygon(shaft_radius, segments, 0.0),
+            );
+            vec![
+                named(
+                    "gear.stl",
+                    Role::A,
+                    prism(&wheel, Some(&bore[..]), 0.0, thickness),
+                ),
+                named(
+                    "shaft.stl",
+                    Role::B,
+                    boss(&base, &shaft, -base_height, 0.0, shaft_length),
+                ),
+            ]
+        }
+        Geometry::BearingHousing {
+            housing,
+            bore_radius,
+            seat_radius,
+            seat_height,
+            plate,
+            segments,
+        } => {
+            let (bore, seat) = (
+                polygon(bore_radius, segments, 0.0),
+                polygon(seat_radius, segments, 0.0),
+            );
+            vec![
+                named(
+                    "housing.stl",
+                    Role::A,
+                    prism(&rect(housing), Some(&bore[..]), 0.0, housing[2]),
+                ),
+                named(
+                    "seat.stl",
+                    Role::B,
+                    boss(&rect(plate), &seat, -plate[2], 0.0, seat_height),
+                ),
+            ]
+        }
+    }
+}
+
+/// Binary STL of the triangles: zero header, normals from the winding; same input, same bytes.
+pub fn stl_bytes(triangles: &[[[f32; 3]; 3]]) -> Vec<u8> {
+    let stl: Vec<stl_io::Triangle> = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| v.map(f64::from));
+            let (u, v) = (sub(b, a), sub(c, a));
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            let unit = if len > 0.0 {
+                n.map(|c| (c / len) as f32)
+            } else {
+                [0.0; 3]
+            };
+            stl_io::Triangle {
+                normal: stl_io::Normal::new(unit),
+                vertices: t.map(stl_io::Vertex::new),
+            }
+        })
+        .collect();
+    let mut bytes = Vec::with_capacity(84 + 50 * stl.len());
+    stl_io::write_stl(&mut bytes, stl.iter()).expect("writing to memory does not fail");
+    bytes
+}
+
+/// Generates a task's meshes from its `[geometry]` and writes them next to its `task.toml`.
+pub fn write_task_meshes(task_dir: &Path) -> Result<Vec<PathBuf>> {
+    let geometry = geometry_of(&task_dir.join("task.toml"))?;
+    meshes(&geometry)
+        .into_iter()
+        .map(|m| {
+            let path = task_dir.join(m.file);
+            std::fs::write(&path, stl_bytes(&m.triangles)).map_err(|source| MapError::Io {
+                path: path.clone(),
+                source,
+            })?;
+            Ok(path)
+        })
+        .collect()
+}
+
+/// Names of the task's mesh files that are missing or differ from what its `[geometry]` gives.
+pub fn check_task_meshes(task_dir: &Path) -> Result<Vec<String>> {
+    let geometry = geometry_of(&task_dir.join("task.toml"))?;
+    Ok(meshes(&geometry)
+        .into_iter()
+        .filter(|m| std::fs::read(task_dir.join(m.file)).ok() != Some(stl_bytes(&m.triangles)))
+        .map(|m| m.file.to_owned())
+        .collect())
+}
+
+/// A triangle in f64 (m).
+type Tri = [[f64; 3]; 3];
+/// A closed polygon in the xy plane, counter-clockwise, star-shaped about the origin.
+type Loop = Vec<[f64; 2]>;
+
+fn to_f32(triangles: &[Tri]) -> Vec<[[f32; 3]; 3]> {
+    triangles
+        .iter()
+        .map(|t| t.map(|v| v.map(|c| c as f32)))
+        .collect()
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// Regular n-gon with its vertices on radius `r`, the first at angle `phase`.
+fn polygon(r: f64, n: u32, phase: f64) -> Loop {
+    (0..n)
+        .map(|k| {
+            let t = phase + TAU * f64::from(k) / f64::from(n);
+            [r * t.cos(), r * t.sin()]
+        })
+        .collect()
+}
+
+/// Rectangle of the first two sizes, centred on the origin.
+fn rect(size: [f64; 3]) -> Loop {
+    let (x, y) = (size[0] / 2.0, size[1] / 2.0);
+    vec![[x, -y], [x, y], [-x, y], [-x, -y]]
+}
+
+/// Gear outline: per tooth root, tip, tip, root corners, the first tooth centred on +x.
+fn gear(teeth: u32, tip: f64, root: f64, tip_fraction: f64, root_fraction: f64) -> Loop {
+    let pitch = TAU / f64::from(teeth);
+    let corners = [
+        (-root_fraction, root),
+        (-tip_fraction, tip),
+        (tip_fraction, tip),
+        (root_fraction, root),
+    ];
+    (0..teeth)
+        .flat_map(|k| {
+            corners.map(|(f, r)| {
+                let t = pitch * (f64::from(k) + f / 2.0);
+                [r * t.cos(), r * t.sin()]
+            })
+        })
+        .collect()
+}
+
+fn at(p: [f64; 2], z: f64) -> [f64; 3] {
+    [p[0], p[1], z]
+}
+
+/// Pushes a triangle as given (`keep`) or reversed.
+fn push(out: &mut Vec<Tri>, [a, b, c]: Tri, keep: bool) {
+    out.push(if keep { [a, b, c] } else { [a, c, b] });
+}
+
+/// Side band of a loop from z0 up to z1, facing away from the axis (`outward`) or toward it.
+fn wall(out: &mut Vec<Tri>, l: &[[f64; 2]], z0: f64, z1: f64, outward: bool) {
+    for (j, &p) in l.iter().enumerate() {
+        let q = l[(j + 1) % l.len()];
+        push(out, [at(p, z0), at(q, z0), at(q, z1)], outward);
+        push(out, [at(p, z0), at(q, z1), at(p, z1)], outward);
+    }
+}
+
+/// The face inside a loop at height z, fanned from the axis, facing +z (`up`) or -z.
+fn disk(out: &mut Vec<Tri>, l: &[[f64; 2]], z: f64, up: bool) {
+    for (j, &p) in l.iter().enumerate() {
+        push(
+            out,
+            [[0.0, 0.0, z], at(p, z), at(l[(j + 1) % l.len()], z)],
+            up,
+        );
+    }
+}
+
+/// The face between two loops sampled on the same rays (see [`matched`]), facing +z (`up`)
+/// or -z. Between consecutive rays (less than 180 degrees apart) lies a convex quad: inner
+/// point, outer point, next outer point, next inner point, counter-clockwise.
+fn annulus(out: &mut Vec<Tri>, outer: &[[f64; 2]], inner: &[[f64; 2]], z: f64, up: bool) {
+    for k in 0..outer.len() {
+        let next = (k + 1) % outer.len();
+        let [a, b, c, d] = [inner[k], outer[k], outer[next], inner[next]].map(|p| at(p, z));
+        push(out, [a, b, c], up);
+        push(out, [a, c, d], up);
+    }
+}
+
+/// Polar angle in [0, 2 pi); angles within 1e-12 below 2 pi count as 0.
+fn angle(p: [f64; 2]) -> f64 {
+    let a = p[1].atan2(p[0]).rem_euclid(TAU);
+    if a > TAU - 1e-12 { 0.0 } else { a }
+}
+
+/// Both loops resampled on the union of their vertex rays from the origin, so that the face
+/// between them splits into quads between consecutive rays. Every original vertex is kept
+/// (vertices of the two loops within 1e-9 rad share a ray); the added points lie on the
+/// loops' edges, so the outlines do not change.
+fn matched(outer: &[[f64; 2]], inner: &[[f64; 2]]) -> (Loop, Loop) {
+    const TOL: f64 = 1e-9;
+    let mut rays: Vec<(f64, [f64; 2])> =
+        outer.iter().chain(inner).map(|&p| (angle(p), p)).collect();
+    rays.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut unique: Vec<(f64, [f64; 2])> = Vec::with_capacity(rays.len());
+    for ray in rays {
+        if unique.last().is_none_or(|last| ray.0 - last.0 > TOL) {
+            unique.push(ray);
+        }
+    }
+    let resample = |l: &[[f64; 2]]| -> Loop {
+        unique
+            .iter()
+            .map(|&(phi, dir)| {
+                if let Some(&v) = l.iter().find(|&&v| (angle(v) - phi).abs() <= TOL) {
+                    return v;
+                }
+                let j = (0..l.len())
+                    .find(|&j| {
+                        let (from, to) = (angle(l[j]), angle(l[(j + 1) % l.len()]));
+                        (phi - from).rem_euclid(TAU) < (to - from).rem_euclid(TAU)
+                    })
+                    .expect("a star-shaped loop has an edge across every ray");
+                let (a, b) = (l[j], l[(j + 1) % l.len()]);
+                let e = [b[0] - a[0], b[1] - a[1]];
+                let s = (dir[0] * a[1] - dir[1] * a[0]) / (e[0] * dir[1] - e[1] * dir[0]);
+                [a[0] + s * e[0], a[1] + s * e[1]]
+            })
+            .collect()
+    };
+    (resample(outer), resample(inner))
+}
+
+/// A straight prism of `outer` from z0 up to z1, with an optional through hole.
+fn prism(outer: &[[f64; 2]], hole: Option<&[[f64; 2]]>, z0: f64, z1: f64) -> Vec<Tri> {
+    let mut out = Vec::new();
+    match hole {
+        None => {
+            wall(&mut out, outer, z0, z1, true);
+            disk(&mut out, outer, z0, false);
+            disk(&mut out, outer, z1, true);
+        }
+        Some(hole) => {
+            let (o, i) = matched(outer, hole);
+            wall(&mut out, &o, z0, z1, true);
+            wall(&mut out, &i, z0, z1, false);
+            annulus(&mut out, &o, &i, z0, false);
+            annulus(&mut out, &o, &i, z1, true);
+        }
+    }
+    out
+}
+
+/// A prism of `lower` from z0 to z1 carrying a prism of `upper` (inside it) from z1 to z2.
+fn boss(lower: &[[f64; 2]], upper: &[[f64; 2]], z0: f64, z1: f64, z2: f64) -> Vec<Tri> {
+    let (o, i) = matched(lower, upper);
+    let mut out = Vec::new();
+    wall(&mut out, &o, z0, z1, true);
+    disk(&mut out, &o, z0, false);
+    annulus(&mut out, &o, &i, z1, true);
+    wall(&mut out, &i, z1, z2, true);
+    disk(&mut out, &i, z2, true);
+    out
+}
+
+/// A prism of `outer` from z0 to z2 with a blind hole `hole` from its top down to z1.
+fn pocket(outer: &[[f64; 2]], hole: &[[f64; 2]], z0: f64, z1: f64, z2: f64) -> Vec<Tri> {
+    let (o, i) = matched(outer, hole);
+    let mut out = Vec::new();
+    wall(&mut out, &o, z0, z2, true);
+    disk(&mut out, &o, z0, false);
+    annulus(&mut out, &o, &i, z2, true);
+    wall(&mut out, &i, z1, z2, false);
+    disk(&mut out, &i, z1, true);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashMap;
+
+    use super::*;
+
+    const MM: f64 = 1e-3;
+    /// Half an f32 step at 40 mm is 1.9 nm: coordinates are compared to 5 nm.
+    const EPS: f64 = 5e-9;
+    const TASKS: [(&str, [&str; 2]); 4] = [
+        ("peg_in_hole", ["peg.stl", "block.stl"]),
+        ("octagon", ["peg.stl", "block.stl"]),
+        ("gear", ["gear.stl", "shaft.stl"]),
+        ("bearing_housing", ["housing.stl", "seat.stl"]),
+    ];
+
+    fn models() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../models_mjcf")
+    }
+
+    fn geometry(task: &str) -> Geometry {
+        geometry_of(&models().join(task).join("task.toml"))
+            .expect("committed task files have a valid [geometry]")
+    }
+
+    /// The triangles of one generated part, in f64.
+    fn part(task: &str, file: &str) -> Vec<Tri> {
+        let m = meshes(&geometry(task))
+            .into_iter()
+            .find(|m| m.file == file)
+            .expect("the task has this part");
+        m.triangles
+            .iter()
+            .map(|t| t.map(|v| v.map(f64::from)))
+            .collect()
+    }
+
+    fn vertices(tris: &[Tri]) -> Vec<[f64; 3]> {
+        tris.iter().flatten().copied().collect()
+    }
+
+    /// Signed volume by the divergence theorem.
+    fn volume(tris: &[Tri]) -> f64 {
+        tris.iter()
+            .map(|[a, b, c]| {
+                a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                    + a[2] * (b[0] * c[1] - b[1] * c[0])
+            })
+            .sum::<f64>()
+            / 6.0
+    }
+
+    fn bbox(tris: &[Tri]) -> ([f64; 3], [f64; 3]) {
+        vertices(tris)
+            .iter()
+            .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), v| {
+                (
+                    std::array::from_fn(|i| lo[i].min(v[i])),
+                    std::array::from_fn(|i| hi[i].max(v[i])),
+                )
+            })
+    }
+
+    /// Every edge is used exactly once in each direction (closed, consistently wound), and no
+    /// triangle has two equal corners. Vertices are welded by their exact f32 bits.
+    fn watertight(tris: &[Tri]) -> std::result::Result<(), String> {
+        let mut ids: HashMap<[u32; 3], usize> = HashMap::new();
+        let mut edges: HashMap<(usize, usize), u32> = HashMap::new();
+        for t in tris {
+            let id = t.map(|v| {
+                let n = ids.len();
+                *ids.entry(v.map(|c| (c as f32).to_bits())).or_insert(n)
+            });
+            if id[0] == id[1] || id[1] == id[2] || id[0] == id[2] {
+                return Err(format!("degenerate triangle {t:?}"));
+            }
+            for k in 0..3 {
+                *edges.entry((id[k], id[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        for (&(a, b), &count) in &edges {
+            if count != 1 || edges.get(&(b, a)) != Some(&1) {
+                return Err(format!(
+                    "edge {a}->{b} used {count} times, {b}->{a} {:?} times",
+                    edges.get(&(b, a))
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn cross2(o: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    }
+
+    /// No folded faces: the flat faces at one height of these parts all face the same way
+    /// (a triangle folded over its neighbours would keep the mesh closed and its volume).
+    fn no_folds(tris: &[Tri]) -> std::result::Result<(), String> {
+        let mut facing: HashMap<u64, f64> = HashMap::new();
+        for t in tris
+            .iter()
+            .filter(|t| t[0][2] == t[1][2] && t[1][2] == t[2][2])
+        {
+            let [a, b, c] = t.map(|v| [v[0], v[1]]);
+            let area = cross2(a, b, c);
+            let first = *facing.entry(t[0][2].to_bits()).or_insert(area);
+            if area * first <= 0.0 {
+                return Err(format!(
+                    "flat triangle {t:?} faces against its neighbours at z = {}",
+                    t[0][2]
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Area of a regular n-gon with its vertices on radius r.
+    fn ngon(r: f64, n: u32) -> f64 {
+        f64::from(n) / 2.0 * r * r * (TAU / f64::from(n)).sin()
+    }
+
+    fn close(got: f64, want: f64, rel: f64) -> bool {
+        (got - want).abs() <= rel * want.abs()
+    }
+
+    #[test]
+    fn every_part_is_closed_and_faces_outward() {
+        for (task, files) in TASKS {
+            let parts = meshes(&geometry(task));
+            assert_eq!(
+                parts.iter().map(|m| m.file).collect::<Vec<_>>(),
+                files,
+                "{task}"
+            );
+            assert_eq!(
+                parts.iter().map(|m| m.role).collect::<Vec<_>>(),
+                [Role::A, Role::B],
+                "{task}"
+            );
+            for file in files {
+                let tris = part(task, file);
+                watertight(&tris).unwrap_or_else(|e| panic!("{task}/{file}: not watertight: {e}"));
+                assert!(volume(&tris) > 0.0, "{task}/{file}: faces point inward");
+                no_folds(&tris).unwrap_or_else(|e| panic!("{task}/{file}: {e}"));
+            }
+        }
+    }
+
+    #[test]
+    fn the_watertight_check_sees_holes_and_flipped_faces() {
+        let tris = part("peg_in_hole", "peg.stl");
+        assert!(watertight(&tris[1..]).is_err());
+        let mut flipped = tris.clone();
+        flipped[7].swap(1, 2);
+        assert!(watertight(&flipped).is_err());
+        assert!(no_folds(&tris).is_ok());
+        let flat = tris
+            .iter()
+            .position(|t| t.iter().all(|v| v[2] == 0.0))
+            .expect("the tip face");
+        let mut folded = tris.clone();
+        folded[flat].swap(1, 2);
+        assert!(no_folds(&folded).is_err());
+    }
+
+    #[test]
+    fn volumes_match_the_analytic_solids() {
+        let n = 256;
+        let octagon = |w: f64| 2.0 * (2f64.sqrt() - 1.0) * w * w;
+        // Gear outline from the origin: per 18 degree pitch, two flank triangles (root to
+        // tip corner, 0.125 pitch apart), the tip (0.25 pitch) and the root land (0.5 pitch).
+        let p = TAU / 20.0;
+        let gear = 20.0
+            * 0.5
+            * (2.0 * 17.5 * 20.0 * (0.125 * p).sin()
+                + 20.0 * 20.0 * (0.25 * p).sin()
+                + 17.5 * 17.5 * (0.5 * p).sin());
+        let cases = [
+            ("peg_in_hole", "peg.stl", ngon(4.95, n) * 40.0),
+            (
+                "peg_in_hole",
+                "block.stl",
+                40.0 * 40.0 * 20.0 - ngon(5.0, n) * 10.0,
+            ),
+            ("octagon", "peg.stl", octagon(10.0) * 40.0),
+            (
+                "octagon",
+                "block.stl",
+                40.0 * 40.0 * 20.0 - octagon(10.05) * 10.0,
+            ),
+            ("gear", "gear.stl", (gear - ngon(5.0, n)) * 8.0),
+            (
+                "gear",
+                "shaft.stl",
+                ngon(15.0, n) * 10.0 + ngon(4.95, n) * 15.0,
+            ),
+            (
+                "bearing_housing",
+                "housing.stl",
+                (40.0 * 40.0 - ngon(11.0, n)) * 16.0,
+            ),
+            (
+                "bearing_housing",
+                "seat.stl",
+                60.0 * 60.0 * 10.0 + ngon(10.95, n) * 12.0,
+            ),
+        ];
+        for (task, file, mm3) in cases {
+            let got = volume(&part(task, file));
+            assert!(
+                close(got, mm3 * 1e-9, 1e-6),
+                "{task}/{file}: volume {got:e} m^3, analytic {:e}",
+                mm3 * 1e-9
+            );
+        }
+    }
+
+    #[test]
+    fn bounding_boxes_are_the_specified_dimensions() {
+        let cases = [
+            (
+                "peg_in_hole",
+                "peg.stl",
+                [-4.95, -4.95, 0.0],
+                [4.95, 4.95, 40.0],
+            ),
+            (
+                "peg_in_hole",
+                "block.stl",
+                [-20.0, -20.0, -10.0],
+                [20.0, 20.0, 10.0],
+            ),
+            ("octagon", "peg.stl", [-5.0, -5.0, 0.0], [5.0, 5.0, 40.0]),
+            (
+                "octagon",
+                "block.stl",
+                [-20.0, -20.0, -10.0],
+                [20.0, 20.0, 10.0],
+            ),
+            (
+                "gear",
+                "shaft.stl",
+                [-15.0, -15.0, -10.0],
+                [15.0, 15.0, 15.0],
+            ),
+            (
+                "bearing_housing",
+                "housing.stl",
+                [-20.0, -20.0, 0.0],
+                [20.0, 20.0, 16.0],
+            ),
+            (
+                "bearing_housing",
+                "seat.stl",
+                [-30.0, -30.0, -10.0],
+                [30.0, 30.0, 12.0],
+            ),
+        ];
+        for (task, file, lo, hi) in cases {
+            let (got_lo, got_hi) = bbox(&part(task, file));
+            for i in 0..3 {
+                assert!(
+                    (got_lo[i] - lo[i] * MM).abs() < EPS && (got_hi[i] - hi[i] * MM).abs() < EPS,
+                    "{task}/{file}: box {got_lo:?}..{got_hi:?}, specified {lo:?}..{hi:?} mm"
+                );
+            }
+        }
+        // The gear's teeth are flat-topped, so its box is inside the tip circle: check radii.
+        let gear = part("gear", "gear.stl");
+        let (lo, hi) = bbox(&gear);
+        assert!(
+            lo[2].abs() < EPS && (hi[2] - 8.0 * MM).abs() < EPS,
+            "gear z {lo:?}..{hi:?}"
+        );
+        let r_max = vertices(&gear)
+            .iter()
+            .map(|v| v[0].hypot(v[1]))
+            .fold(0.0, f64::max);
+        assert!((r_max - 20.0 * MM).abs() < EPS, "gear tip radius {r_max}");
+    }
+
+    /// Vertices between radii lo and hi (mm) with z in [z0, z1] (mm), as (angle, radius).
+    fn rim(tris: &[Tri], lo: f64, hi: f64, z0: f64, z1: f64) -> Vec<(f64, f64)> {
+        let mut v: Vec<(f64, f64)> = vertices(tris)
+            .iter()
+            .filter(|v| v[2] >= z0 * MM - EPS && v[2] <= z1 * MM + EPS)
+            .map(|v| (angle([v[0], v[1]]), v[0].hypot(v[1])))
+            .filter(|&(_, r)| r > lo * MM && r < hi * MM)
+            .collect();
+        v.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        v.dedup();
+        v
+    }
+
+    /// The rim is the regular 256-gon on radius r (mm), first vertex at angle 0, possibly
+    /// with extra points on its edges.
+    fn on_circle(what: &str, rim: &[(f64, f64)], r: f64) -> f64 {
+        let n = 256;
+        let nominal: Vec<f64> = rim
+            .iter()
+            .filter(|p| (p.1 - r * MM).abs() < 1e-9)
+            .map(|p| p.0)
+            .collect();
+        assert_eq!(nominal.len(), n, "{what}: vertices on r = {r} mm");
+        for (k, a) in nominal.iter().enumerate() {
+            let want = TAU * k as f64 / n as f64;
+            assert!(
+                (a - want).abs() < 1e-6,
+                "{what}: vertex {k} at {a} rad, expected {want}"
+            );
+        }
+        let flat = r * MM * (PI / n as f64).cos();
+        assert!(
+            rim.iter().all(|p| p.1 > flat - 1e-9 && p.1 < r * MM + 1e-9),
+            "{what}: a point off the polygon"
+        );
+        rim.iter().map(|p| p.1).fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn round_clearances_are_kept_at_every_vertex() {
+        // (task, A file, A rim radius and z range, B file, B rim radius and z range), mm.
+        let cases = [
+            (
+                "peg_in_hole",
+                "peg.stl",
+                4.95,
+                (0.0, 40.0),
+                "block.stl",
+                5.0,
+                (0.0, 10.0),
+            ),
+            (
+                "gear",
+                "shaft.stl",
+                4.95,
+                (0.0, 15.0),
+                "gear.stl",
+                5.0,
+                (0.0, 8.0),
+            ),
+            (
+                "bearing_housing",
+                "seat.stl",
+                10.95,
+                (0.0, 12.0),
+                "housing.stl",
+                11.0,
+                (0.0, 16.0),
+            ),
+        ];
+        for (task, inner_file, r_in, (z0, z1), outer_file, r_out, (w0, w1)) in cases {
+            let inner = on_circle(
+                &format!("{task}/{inner_file}"),
+                &rim(&part(task, inner_file), 1.0, r_in + 0.01, z0, z1),
+                r_in,
+            );
+            let outer = on_circle(
+                &format!("{task}/{outer_file}"),
+                &rim(&part(task, outer_file), 1.0, r_out + 0.01, w0, w1),
+                r_out,
+            );
+            // Same vertex angles: the radial gap is 0.05 mm at the vertices and
+            // 0.05 mm x cos(pi / 256) across the flats.
+            assert!(
+                (outer - inner - 0.05 * MM).abs() < 2e-9,
+                "{task}: radial clearance {} mm",
+                (outer - inner) / MM
+            );
+        }
+    }
+
+    #[test]
+    fn octagon_flats_are_the_specified_distances() {
+        let width = |tris: &[Tri], dir: f64| {
+            let d = [dir.cos(), dir.sin()];
+            let proj: Vec<f64> = vertices(tris)
+                .iter()
+                .map(|v| v[0] * d[0] + v[1] * d[1])
+                .collect();
+            proj.iter().fold(f64::MIN, |a, &b| a.max(b))
+                - proj.iter().fold(f64::MAX, |a, &b| a.min(b))
+        };
+        let peg = part("octagon", "peg.stl");
+        let block = part("octagon", "block.stl");
+        let hole: Vec<Tri> = block
+            .iter()
+            .filter(|t| t.iter().all(|v| v[0].hypot(v[1]) < 8.0 * MM && v[2] > -EPS))
+            .copied()
+            .collect();
+        assert!(!hole.is_empty());
+        for k in 0..4 {
+            let dir = f64::from(k) * PI / 4.0;
+            let (p, h) = (width(&peg, dir), width(&hole, dir));
+            assert!(
+                (p - 10.0 * MM).abs() < EPS,
+                "peg across flats at {k} x 45 deg: {p}"
+            );
+            assert!(
+                (h - 10.05 * MM).abs() < EPS,
+                "hole across flats at {k} x 45 deg: {h}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_gear_has_twenty_trapezoid_teeth() {
+        let top = rim(&part("gear", "gear.stl"), 10.0, 21.0, 8.0, 8.0);
+        let tips: Vec<f64> = top
+            .iter()
+            .filter(|p| (p.1 - 20.0 * MM).abs() < 1e-9)
+            .map(|p| p.0)
+            .collect();
+        let roots = top
+            .iter()
+            .filter(|p| (p.1 - 17.5 * MM).abs() < 1e-9)
+            .count();
+        assert_eq!((tips.len(), roots), (40, 40));
+        for (k, a) in tips.iter().enumerate() {
+            // Tip corners at tooth centre (k x 18 deg) +- 2.25 deg.
+            let tooth = (k.div_ceil(2) % 20) as f64 * 18.0;
+            let want = (tooth + if k % 2 == 0 { 2.25 } else { -2.25 })
+                .rem_euclid(360.0)
+                .to_radians();
+            assert!(
+                (a - want).abs() < 1e-6,
+                "tip corner {k} at {} deg",
+                a.to_degrees()
+            );
+        }
+    }
+
+    #[test]
+    fn circles_are_fine_enough() {
+        for (task, _) in TASKS {
+            let (radii, n) = match geometry(task) {
+                Geometry::RoundPeg {
+                    peg_radius,
+                    hole_radius,
+                    segments,
+                    ..
+                } => (vec![peg_radius, hole_radius], segments),
+                Geometry::GearOnShaft {
+                    bore_radius,
+                    shaft_radius,
+                    base_radius,
+                    segments,
+                    ..
+                } => (vec![bore_radius, shaft_radius, base_radius], segments),
+                Geometry::BearingHousing {
+                    bore_radius,
+                    seat_radius,
+                    segments,
+                    ..
+                } => (vec![bore_radius, seat_radius], segments),
+                Geometry::OctagonPeg { .. } => continue,
+            };
+            for r in radii {
+                let sagitta = r * (1.0 - (PI / f64::from(n)).cos());
+                assert!(
+                    sagitta < 2e-6,
+                    "{task}: r {r} with {n} segments: flats {sagitta} m inside"
+                );
+            }
+        }
+    }
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("ftmap-cad-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir
+    }
+
+    #[test]
+    fn bad_geometry_tables_are_refused_with_the_file_and_reason() {
+        let dir = temp_dir("bad");
+        let path = dir.join("task.toml");
+        let good = "kind = \"round_peg\"\npeg_radius = 0.00495\npeg_length = 0.04\nhole_radius = 0.005\n\
+                    hole_depth = 0.01\nblock = [0.04, 0.04, 0.02]\nsegments = 256\n";
+        let cases = [
+            ("name = \"x\"\n".to_owned(), "no [geometry]"),
+            ("[geometry]\nkind = \"hexagon\"\n".to_owned(), "hexagon"),
+            (format!("[geometry]\n{good}colour = 1\n"), "colour"),
+            (
+                format!("[geometry]\n{}", good.replace("0.00495", "0.0051")),
+                "peg_radius",
+            ),
+            (
+                format!("[geometry]\n{}", good.replace("256", "30")),
+                "segments",
+            ),
+        ];
+        for (text, needle) in cases {
+            std::fs::write(&path, &text).expect("write");
+            let e = geometry_of(&path).expect_err(&text);
+            assert!(matches!(e, MapError::Task { .. }), "{e}");
+            let msg = e.to_string();
+            assert!(msg.contains(needle) && msg.contains("task.toml"), "{msg}");
+        }
+        std::fs::write(&path, format!("[geometry]\n{good}")).expect("write");
+        assert!(geometry_of(&path).is_ok());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn stale_and_missing_files_are_reported() {
+        let dir = temp_dir("stale");
+        let text =
+            std::fs::read_to_string(models().join("octagon/task.toml")).expect("octagon task");
+        std::fs::write(dir.join("task.toml"), text).expect("write");
+        let written = write_task_meshes(&dir).expect("write meshes");
+        assert_eq!(written, [dir.join("peg.stl"), dir.join("block.stl")]);
+        assert!(check_task_meshes(&dir).expect("check").is_empty());
+        let mut bytes = std::fs::read(dir.join("block.stl")).expect("read");
+        bytes[100] ^= 1;
+        std::fs::write(dir.join("block.stl"), bytes).expect("write");
+        std::fs::remove_file(dir.join("peg.stl")).expect("remove");
+        assert_eq!(
+            check_task_meshes(&dir).expect("check"),
+            ["peg.stl", "block.stl"]
+        );
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn stl_bytes_read_back_with_unit_normals_from_the_winding() {
+        let m = meshes(&geometry("peg_in_hole")).remove(0);
+        let bytes = stl_bytes(&m.triangles);
+        assert_eq!(bytes.len(), 84 + 50 * m.triangles.len());
+        assert_eq!(bytes, stl_bytes(&m.triangles));
+        let stl = stl_io::read_stl(&mut std::io::Cursor::new(&bytes)).expect("readable STL");
+        assert_eq!(stl.faces.len(), m.triangles.len());
+        for f in &stl.faces {
+            let [a, b, c] = f.vertices.map(|i| stl.vertices[i]);
+            let n = f.normal;
+            assert!((n[0] * n[0] + n[1] * n[1] + n[2] * n[2] - 1.0).abs() < 1e-5);
+            if [a, b, c].iter().all(|v| v[2] == 0.0) {
+                assert_eq!(n.0, [0.0, 0.0, -1.0], "the tip face points down");
+            }
+            if [a, b, c].iter().all(|v| v[2] > 0.0 && v[2] < 0.04) {
+                let mid = [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0];
+                assert!(
+                    mid[0] * n[0] + mid[1] * n[1] > 0.0,
+                    "side faces point away from the axis"
+                );
+            }
+        }
+    }
+}
