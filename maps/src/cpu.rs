@@ -2,6 +2,7 @@
 //! rasterizer and the shifted-difference contact reduction, parallel with rayon.
 
 use rayon::prelude::*;
+use wide::f32x8;
 
 use crate::depth::{ContactSummary, DepthBackend, DepthImage, RenderJob, Shift, Surface};
 use crate::error::Result;
@@ -63,8 +64,8 @@ impl DepthBackend for CpuBackend {
         shifts: &[Shift],
         tolerance: f32,
     ) -> Result<Vec<ContactSummary>> {
-        let spans = RowSpans::of(a);
-        Ok(shifts.par_iter().map(|s| summarize(a, b, b_normals, &spans, *s, tolerance)).collect())
+        let rows = Rows { spans: RowSpans::of(a), flat: flat_rows(a), normals: Normals::of(b, b_normals) };
+        Ok(shifts.par_iter().map(|s| summarize(a, b, &rows, *s, tolerance)).collect())
     }
 }
 
@@ -119,27 +120,133 @@ fn row_pairs<'s>(a: &'s DepthImage, b: &'s DepthImage, spans: &'s RowSpans, s: S
     })
 }
 
-/// Minimum of `a[k] - b[k]`, written so that it vectorizes.
+/// Eight lanes of `s` starting at `k`.
+fn lanes(s: &[f32], k: usize) -> f32x8 {
+    f32x8::from(<[f32; 8]>::try_from(&s[k..k + 8]).expect("8 values"))
+}
+
+/// Minimum of `a[k] - b[k]`, eight lanes at a time.
 fn min_diff(a: &[f32], b: &[f32]) -> f32 {
-    const L: usize = 8;
-    let mut acc = [f32::INFINITY; L];
-    let (ac, bc) = (a.chunks_exact(L), b.chunks_exact(L));
-    let (ar, br) = (ac.remainder(), bc.remainder());
-    for (x, y) in ac.zip(bc) {
-        for k in 0..L {
-            let d = x[k] - y[k];
-            acc[k] = if d < acc[k] { d } else { acc[k] };
-        }
+    let full = a.len() - a.len() % 8;
+    let mut acc = f32x8::splat(f32::INFINITY);
+    for k in (0..full).step_by(8) {
+        acc = acc.fast_min(lanes(a, k) - lanes(b, k));
     }
-    let mut m = acc.iter().copied().fold(f32::INFINITY, f32::min);
-    for (x, y) in ar.iter().zip(br) {
-        m = m.min(x - y);
+    let mut m = acc.to_array().into_iter().fold(f32::INFINITY, f32::min);
+    for k in full..a.len() {
+        m = m.min(a[k] - b[k]);
     }
     m
 }
 
-fn summarize(a: &DepthImage, b: &DepthImage, bn: &[[f32; 3]], spans: &RowSpans, s: Shift, tol: f32) -> ContactSummary {
-    let w = a.window.width;
+/// Sums over the contact pixels of one row.
+struct RowSums {
+    count: f32,
+    sum_col: f32,
+    sum_height: f32,
+    normal: [f32; 3],
+    first: f32,
+    last: f32,
+}
+
+/// Contacts of one row: pixels k with `a[k] - b[k] <= thr`; columns counted from `col0`.
+/// Masks are applied bitwise, so empty pixels (infinite heights) never make a NaN.
+/// Without `SUMS` the height and normal sums are left 0 (the caller knows them: flat A
+/// row, one B normal).
+fn row_sums<const SUMS: bool>(a: &[f32], b: &[f32], n: [&[f32]; 3], thr: f32, col0: f32) -> RowSums {
+    let full = a.len() - a.len() % 8;
+    let (thr8, one, zero) = (f32x8::splat(thr), f32x8::splat(1.0), f32x8::ZERO);
+    let (mut cnt, mut sc, mut sh) = (zero, zero, zero);
+    let mut sn = [zero; 3];
+    let (mut first, mut last) = (f32x8::splat(f32::INFINITY), f32x8::splat(f32::NEG_INFINITY));
+    let mut col = f32x8::from([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]) + f32x8::splat(col0);
+    for k in (0..full).step_by(8) {
+        let av = lanes(a, k);
+        let hit = (av - lanes(b, k)).simd_le(thr8);
+        cnt += hit & one;
+        sc += hit & col;
+        if SUMS {
+            sh += hit & av;
+            for (acc, nn) in sn.iter_mut().zip(&n) {
+                *acc += hit & lanes(nn, k);
+            }
+        }
+        first = hit.bitselect(first.fast_min(col), first);
+        last = hit.bitselect(last.fast_max(col), last);
+        col += f32x8::splat(8.0);
+    }
+    let mut out = RowSums {
+        count: cnt.reduce_add(),
+        sum_col: sc.reduce_add(),
+        sum_height: sh.reduce_add(),
+        normal: sn.map(|v| v.reduce_add()),
+        first: first.to_array().into_iter().fold(f32::INFINITY, f32::min),
+        last: last
+            .to_array()
+            .into_iter()
+            .fold(f32::NEG_INFINITY, f32::max),
+    };
+    for k in full..a.len() {
+        if a[k] - b[k] <= thr {
+            let col = col0 + k as f32;
+            out.count += 1.0;
+            out.sum_col += col;
+            if SUMS {
+                out.sum_height += a[k];
+                for (o, nn) in out.normal.iter_mut().zip(&n) {
+                    *o += nn[k];
+                }
+            }
+            out.first = out.first.min(col);
+            out.last = out.last.max(col);
+        }
+    }
+    out
+}
+
+/// B's contact normal per pixel, one image per component (zero where B has no surface),
+/// and per row the normal shared by all its pixels, if they share one.
+struct Normals {
+    comp: [Vec<f32>; 3],
+    row_uniform: Vec<Option<[f32; 3]>>,
+}
+
+impl Normals {
+    fn of(b: &DepthImage, bn: &[[f32; 3]]) -> Self {
+        let comp = |c: usize| b.tri.iter().map(|&t| bn.get(t as usize).map_or(0.0, |n| n[c])).collect();
+        let w = b.window.width;
+        let row_uniform = (0..b.window.height)
+            .map(|r| {
+                let mut seen = b.tri[r * w..(r + 1) * w].iter().filter_map(|&t| bn.get(t as usize));
+                let first = *seen.next().unwrap_or(&[0.0; 3]);
+                seen.all(|n| *n == first).then_some(first)
+            })
+            .collect();
+        Self { comp: [comp(0), comp(1), comp(2)], row_uniform }
+    }
+}
+
+/// Per row of A's image, its height when all its pixels with a surface share one.
+fn flat_rows(a: &DepthImage) -> Vec<Option<f32>> {
+    a.height
+        .chunks_exact(a.window.width)
+        .map(|row| {
+            let mut h = row.iter().copied().filter(|h| h.is_finite());
+            let first = h.next().unwrap_or(0.0);
+            h.all(|x| x == first).then_some(first)
+        })
+        .collect()
+}
+
+/// What the contact reduction precomputes once per image pair.
+struct Rows {
+    spans: RowSpans,
+    flat: Vec<Option<f32>>,
+    normals: Normals,
+}
+
+fn summarize(a: &DepthImage, b: &DepthImage, rows: &Rows, s: Shift, tol: f32) -> ContactSummary {
+    let (w, spans, bn) = (a.window.width, &rows.spans, &rows.normals.comp);
     let mut gap = f32::INFINITY;
     let mut row_min = Vec::with_capacity(spans.0.len());
     for p in row_pairs(a, b, spans, s) {
@@ -165,29 +272,31 @@ fn summarize(a: &DepthImage, b: &DepthImage, bn: &[[f32; 3]], spans: &RowSpans, 
         if m > thr {
             continue;
         }
-        let (mut first, mut last) = (u32::MAX, 0u32);
-        for k in 0..=(p.c1 - p.c0) {
-            let (ha, bk) = (a.height[p.r * w + p.c0 + k], p.brow_start + k);
-            let hb = b.height[bk];
-            if ha - hb > thr {
-                continue;
+        let n = p.c1 - p.c0 + 1;
+        let bs = p.brow_start;
+        let (av, bv) = (&a.height[p.r * w + p.c0..][..n], &b.height[bs..bs + n]);
+        let nv = [&bn[0][bs..bs + n], &bn[1][bs..bs + n], &bn[2][bs..bs + n]];
+        let uniform = (rows.flat[p.r], rows.normals.row_uniform[bs / b.window.width]);
+        let r = match uniform {
+            (Some(h), Some(normal)) => {
+                let mut r = row_sums::<false>(av, bv, nv, thr, p.c0 as f32);
+                r.sum_height = r.count * h;
+                r.normal = normal.map(|c| c * r.count);
+                r
             }
-            let c = (p.c0 + k) as u32;
-            first = first.min(c);
-            last = last.max(c);
-            out.count += 1;
-            out.sum_col += f64::from(c);
-            out.sum_row += p.r as f64;
-            out.sum_height += f64::from(ha);
-            if let Some(n) = bn.get(b.tri[bk] as usize) {
-                for (acc, v) in out.sum_normal.iter_mut().zip(n) {
-                    *acc += f64::from(*v);
-                }
-            }
+            _ => row_sums::<true>(av, bv, nv, thr, p.c0 as f32),
+        };
+        if r.count == 0.0 {
+            continue;
         }
-        if first <= last {
-            out.rows.push((p.r as u32, first, last));
+        out.count += r.count as u32;
+        out.sum_col += f64::from(r.sum_col);
+        out.sum_row += f64::from(r.count) * p.r as f64;
+        out.sum_height += f64::from(r.sum_height);
+        for (acc, v) in out.sum_normal.iter_mut().zip(r.normal) {
+            *acc += f64::from(v);
         }
+        out.rows.push((p.r as u32, r.first as u32, r.last as u32));
     }
     out
 }

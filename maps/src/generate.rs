@@ -254,3 +254,45 @@ impl Context<'_> {
         Ok(out)
     }
 }
+
+/// Joins shard maps of one computation into the whole map; every shard 0..n exactly once.
+pub fn merge(parts: Vec<(FtMap, [usize; 2])>) -> Result<FtMap> {
+    let mut parts = parts.into_iter();
+    let (mut map, [i0, n]) = parts
+        .next()
+        .ok_or_else(|| MapError::Grid("merge: no shard given".into()))?;
+    let mut seen = vec![false; n];
+    seen[i0] = true;
+    for (part, [i, m]) in parts {
+        if m != n
+            || part.grid() != map.grid()
+            || part.meta().task != map.meta().task
+            || part.meta().model != map.meta().model
+        {
+            return Err(MapError::Grid(format!(
+                "merge: shard {i}/{m} of task {} does not belong with shard {i0}/{n} of task {}",
+                part.meta().task,
+                map.meta().task
+            )));
+        }
+        if std::mem::replace(&mut seen[i], true) {
+            return Err(MapError::Grid(format!("merge: shard {i}/{n} given twice")));
+        }
+        for (dst, src) in map.data_mut().iter_mut().zip(part.data()) {
+            if !src.is_nan() {
+                *dst = *src;
+            }
+        }
+    }
+    if let Some(missing) = seen.iter().position(|s| !s) {
+        return Err(MapError::Grid(format!(
+            "merge: shard {missing}/{n} is missing"
+        )));
+    }
+    if map.data().iter().any(|v| v.is_nan()) {
+        return Err(MapError::Grid(
+            "merge: some cells were computed by no shard".into(),
+        ));
+    }
+    Ok(map)
+}

@@ -15,6 +15,7 @@ pub mod gpu;
 pub mod grid;
 pub mod map;
 pub mod mesh;
+pub mod plot;
 pub mod task;
 pub mod wrench;
 

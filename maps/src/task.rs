@@ -180,13 +180,6 @@ impl Task {
         if !(d.pixel > 0.0 && d.tolerance >= 0.0 && d.pixel.is_finite() && d.tolerance.is_finite()) {
             return Err(err(format!("depth.pixel {} must be > 0, depth.tolerance {} >= 0", d.pixel, d.tolerance)));
         }
-        let ratio = file.omega.delta_trans / d.pixel;
-        if (ratio - ratio.round()).abs() > 1e-6 || ratio.round() < 1.0 {
-            return Err(err(format!(
-                "depth.pixel {} must divide omega.delta_trans {} (translations are whole-pixel shifts)",
-                d.pixel, file.omega.delta_trans
-            )));
-        }
         let task = Self {
             name: file.name,
             description: file.description,
@@ -219,9 +212,19 @@ impl Task {
         Ok(dofs)
     }
 
-    /// The grid over Omega.
+    /// The grid over Omega; the pixel size must divide the translation step.
     pub fn grid(&self) -> Result<Grid> {
         let o = &self.omega;
+        let ratio = o.delta_trans / self.depth.pixel;
+        if (ratio - ratio.round()).abs() > 1e-6 || ratio.round() < 1.0 {
+            return Err(MapError::Task {
+                path: self.path.clone(),
+                reason: format!(
+                    "depth.pixel {} must divide omega.delta_trans {} (translations are whole-pixel shifts)",
+                    self.depth.pixel, o.delta_trans
+                ),
+            });
+        }
         let axes = self
             .dofs()?
             .into_iter()
