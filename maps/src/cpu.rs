@@ -65,7 +65,7 @@ impl DepthBackend for CpuBackend {
         tolerance: f32,
     ) -> Result<Vec<ContactSummary>> {
         let rows = Rows { spans: RowSpans::of(a), flat: flat_rows(a), normals: Normals::of(b, b_normals) };
-        Ok(shifts.par_iter().map(|s| summarize(a, b, &rows, *s, tolerance)).collect())
+        Ok(shifts.par_iter().map_init(Vec::new, |scratch, s| summarize(a, b, &rows, *s, tolerance, scratch)).collect())
     }
 }
 
@@ -74,7 +74,10 @@ fn edge(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
-/// Per row of A's image, the first and last column with a surface.
+/// Lane width of the vector loops.
+const LANES: usize = 8;
+
+/// Per row of A's image, the first and last column with a surface (widened to whole lanes).
 struct RowSpans(Vec<Option<(usize, usize)>>);
 
 impl RowSpans {
@@ -86,7 +89,11 @@ impl RowSpans {
                     let row = &a.height[r * w..(r + 1) * w];
                     let first = row.iter().position(|h| h.is_finite())?;
                     let last = row.iter().rposition(|h| h.is_finite())?;
-                    Some((first, last))
+                    // Widen to whole lanes of 8 where the row allows (the extra pixels are
+                    // empty, so they never touch): the lane loops then need no remainder.
+                    let c0 = first - first % LANES;
+                    let c1 = (c0 + (last - c0 + 1).div_ceil(LANES) * LANES).min(w) - 1;
+                    Some((c0, c1))
                 })
                 .collect(),
         )
@@ -94,6 +101,7 @@ impl RowSpans {
 }
 
 /// The row of A (r) overlapping B under a shift: A columns c0..=c1 and the B slice start.
+#[derive(Clone, Copy)]
 struct RowPair {
     r: usize,
     c0: usize,
@@ -245,10 +253,19 @@ struct Rows {
     normals: Normals,
 }
 
-fn summarize(a: &DepthImage, b: &DepthImage, rows: &Rows, s: Shift, tol: f32) -> ContactSummary {
+/// The contact summary of one shift; `scratch` is a per-thread buffer for row minima.
+fn summarize(
+    a: &DepthImage,
+    b: &DepthImage,
+    rows: &Rows,
+    s: Shift,
+    tol: f32,
+    scratch: &mut Vec<(RowPair, f32)>,
+) -> ContactSummary {
     let (w, spans, bn) = (a.window.width, &rows.spans, &rows.normals.comp);
     let mut gap = f32::INFINITY;
-    let mut row_min = Vec::with_capacity(spans.0.len());
+    let row_min = scratch;
+    row_min.clear();
     for p in row_pairs(a, b, spans, s) {
         let n = p.c1 - p.c0 + 1;
         let m = min_diff(&a.height[p.r * w + p.c0..][..n], &b.height[p.brow_start..][..n]);
@@ -268,7 +285,7 @@ fn summarize(a: &DepthImage, b: &DepthImage, rows: &Rows, s: Shift, tol: f32) ->
         return out;
     }
     let thr = gap + tol;
-    for (p, m) in row_min {
+    for &(p, m) in row_min.iter() {
         if m > thr {
             continue;
         }

@@ -206,7 +206,8 @@ impl Context<'_> {
         let a_pose = Isometry3::identity();
         let b_pose = Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_rotation_matrix(&r2));
         let [u0, u1, v0, v1] = bounds(self.mesh_a, &a_pose);
-        let a_win = PixelWindow::covering(u0, u1, v0, v1, pixel, 1);
+        let mut a_win = PixelWindow::covering(u0, u1, v0, v1, pixel, 1);
+        a_win.width = a_win.width.next_multiple_of(8); // whole vector lanes per row
         let b_win = PixelWindow {
             i0: a_win.i0 - reach_u,
             j0: a_win.j0 - reach_v,
