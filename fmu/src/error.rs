@@ -1,0 +1,56 @@
+//! The error type of the `ftfusion` crate: one structured variant per way a parameter,
+//! map, measurement, saved state or FMI call can be refused.
+
+use std::path::PathBuf;
+
+/// Everything the estimator and the FMU instance can refuse.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum FusionError {
+    /// A parameter outside its allowed range.
+    #[error("parameter `{name}` = {value} is out of range: expected {range}")]
+    Parameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// The value given.
+        value: String,
+        /// The allowed range, e.g. `[10, 1000000]`.
+        range: String,
+    },
+    /// The map file is missing, unreadable or corrupt.
+    #[error("map {}: {reason}", path.display())]
+    Map {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A measurement with NaN or infinite values.
+    #[error("input `{name}` is {value}: measurement skipped")]
+    NonFinite {
+        /// The first non-finite input.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// Saved state bytes that this build cannot restore into this instance.
+    #[error("FMU state refused: {0}")]
+    State(String),
+    /// An FMI function called in a state where FMI 2.0 does not allow it.
+    #[error("{call} is not allowed in state {mode}")]
+    IllegalCall {
+        /// The FMI function.
+        call: &'static str,
+        /// The instance's state.
+        mode: &'static str,
+    },
+    /// A value reference, type or argument the FMU does not accept.
+    #[error("{0}")]
+    BadArgument(String),
+    /// An FMI function this FMU does not provide.
+    #[error("{0} is not supported by FtFusion")]
+    Unsupported(&'static str),
+}
+
+/// Result with [`FusionError`].
+pub type Result<T, E = FusionError> = std::result::Result<T, E>;

@@ -1,0 +1,190 @@
+//! The estimate of a weighted particle set: particles binned into the map's cells,
+//! clusters as connected groups of occupied cells, the weighted mode of the dominant
+//! cluster (refined by the weighted mean around it), its spread, and the confidence.
+
+use super::{Config, Lookup};
+
+/// Share of the total weight a cluster must hold to be counted.
+const CLUSTER_SHARE: f64 = 0.05;
+
+/// What the filter reports after a measurement.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Estimate {
+    /// Estimated pose value per map axis (m or rad).
+    pub pose: Vec<f64>,
+    /// Weighted standard deviation of the dominant cluster per map axis.
+    pub std: Vec<f64>,
+    /// Weight within the confidence radius of the estimate (0..1).
+    pub confidence: f64,
+    /// confidence > threshold.
+    pub converged: bool,
+    /// Effective sample size.
+    pub ess: f64,
+    /// Clusters holding at least 5 % of the weight (at least 1).
+    pub clusters: u32,
+}
+
+/// Union-find root of `i` with path halving.
+fn root(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
+impl Estimate {
+    /// Computes the estimate of particles `pos` (grid units, axis-major) with normalised
+    /// log weights `lw`.
+    pub fn compute(lookup: &Lookup, cfg: &Config, pos: &[f32], lw: &[f32]) -> Self {
+        let n = lw.len();
+        let axes = lookup.axes();
+        let d = axes.len();
+        let w: Vec<f64> = lw.iter().map(|&l| f64::from(l).exp()).collect();
+        let cell_of = |i: usize| -> usize {
+            axes.iter()
+                .enumerate()
+                .map(|(k, a)| (pos[k * n + i].clamp(0.0, a.top()) + 0.5) as usize * a.stride)
+                .sum()
+        };
+        let mut order: Vec<(usize, u32)> = (0..n).map(|i| (cell_of(i), i as u32)).collect();
+        order.sort_unstable();
+        // Occupied cells: (cell, weight, first, end) over `order`.
+        let mut cells: Vec<(usize, f64, usize, usize)> = Vec::new();
+        for (j, &(cell, i)) in order.iter().enumerate() {
+            match cells.last_mut() {
+                Some(last) if last.0 == cell => {
+                    last.1 += w[i as usize];
+                    last.3 = j + 1;
+                }
+                _ => cells.push((cell, w[i as usize], j, j + 1)),
+            }
+        }
+        let mut parent: Vec<usize> = (0..cells.len()).collect();
+        for c in 0..cells.len() {
+            let key = cells[c].0;
+            for a in axes {
+                if (key / a.stride) % a.count + 1 < a.count
+                    && let Ok(nb) = cells.binary_search_by_key(&(key + a.stride), |x| x.0)
+                {
+                    let (ra, rb) = (root(&mut parent, c), root(&mut parent, nb));
+                    parent[ra.max(rb)] = ra.min(rb);
+                }
+            }
+        }
+        let mut comp_weight = vec![0.0f64; cells.len()];
+        for c in 0..cells.len() {
+            let r = root(&mut parent, c);
+            comp_weight[r] += cells[c].1;
+        }
+        let total: f64 = comp_weight.iter().sum();
+        let clusters = comp_weight
+            .iter()
+            .filter(|&&x| x >= CLUSTER_SHARE * total && x > 0.0)
+            .count()
+            .max(1) as u32;
+        let dominant = (0..cells.len()).fold(0, |best, c| {
+            if comp_weight[c] > comp_weight[best] {
+                c
+            } else {
+                best
+            }
+        });
+        let members: Vec<usize> = (0..cells.len())
+            .filter(|&c| root(&mut parent, c) == dominant)
+            .collect();
+        let mode =
+            members.iter().copied().fold(
+                members[0],
+                |b, c| if cells[c].1 > cells[b].1 { c } else { b },
+            );
+        let index = |cell: usize, a: &super::MapAxis| (cell / a.stride) % a.count;
+
+        // Weighted mean of the particles within one cell of the mode, and the cluster's mean.
+        let mut near = vec![0.0f64; d];
+        let mut near_w = 0.0;
+        let mut mean = vec![0.0f64; d];
+        let mut mean_w = 0.0;
+        for &c in &members {
+            let close = axes
+                .iter()
+                .all(|a| index(cells[c].0, a).abs_diff(index(cells[mode].0, a)) <= 1);
+            for &(_, i) in &order[cells[c].2..cells[c].3] {
+                let i = i as usize;
+                for k in 0..d {
+                    let u = f64::from(pos[k * n + i]);
+                    mean[k] += w[i] * u;
+                    if close {
+                        near[k] += w[i] * u;
+                    }
+                }
+                mean_w += w[i];
+                if close {
+                    near_w += w[i];
+                }
+            }
+        }
+        let est: Vec<f64> = near
+            .iter()
+            .map(|s| if near_w > 0.0 { s / near_w } else { 0.0 })
+            .collect();
+        let mean: Vec<f64> = mean
+            .iter()
+            .map(|s| if mean_w > 0.0 { s / mean_w } else { 0.0 })
+            .collect();
+        let mut var = vec![0.0f64; d];
+        for &c in &members {
+            for &(_, i) in &order[cells[c].2..cells[c].3] {
+                let i = i as usize;
+                for k in 0..d {
+                    let e = f64::from(pos[k * n + i]) - mean[k];
+                    var[k] += w[i] * e * e;
+                }
+            }
+        }
+
+        // Confidence: weight within the radius, in grid intervals of the finest translation.
+        let ref_step = axes
+            .iter()
+            .filter(|a| !a.dof.is_rotation())
+            .map(|a| a.step)
+            .reduce(f64::min)
+            .unwrap_or_else(|| axes.iter().map(|a| a.step).fold(f64::INFINITY, f64::min));
+        let r = cfg.confidence_radius / ref_step;
+        let r2 = r * r;
+        let mut confidence = 0.0;
+        for i in 0..n {
+            let dist2: f64 = (0..d)
+                .map(|k| {
+                    let e = f64::from(pos[k * n + i]) - est[k];
+                    e * e
+                })
+                .sum();
+            if dist2 <= r2 {
+                confidence += w[i];
+            }
+        }
+        let confidence = (confidence / total).clamp(0.0, 1.0);
+        let sum_w2: f64 = w.iter().map(|x| x * x).sum();
+        Self {
+            pose: axes
+                .iter()
+                .zip(&est)
+                .map(|(a, &u)| a.min + u * a.step)
+                .collect(),
+            std: axes
+                .iter()
+                .zip(&var)
+                .map(|(a, &v)| (v / mean_w.max(f64::MIN_POSITIVE)).sqrt() * a.step)
+                .collect(),
+            confidence,
+            converged: confidence > cfg.threshold,
+            ess: if sum_w2 > 0.0 {
+                total * total / sum_w2
+            } else {
+                0.0
+            },
+            clusters,
+        }
+    }
+}

@@ -1,0 +1,311 @@
+//! The FT-Map as the filter reads it: cells padded to eight `f32` channels, axes in grid
+//! units, and the log-likelihood of Eq. 3 for a whole particle set in one pass (nearest
+//! cell or multilinear, specialised per number of axes).
+
+use std::path::Path;
+
+use ftmap::{Axis, Dof, FtMap, NCH, Pose};
+
+use crate::error::{FusionError, Result};
+
+/// Channels per padded cell: fx fy fz tx ty tz depth, 0.
+pub const LANES: usize = 8;
+
+/// One axis of the map in the filter's terms.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MapAxis {
+    /// The DOF the axis samples.
+    pub dof: Dof,
+    /// Value of sample 0 (m or rad).
+    pub min: f64,
+    /// Grid interval (m or rad).
+    pub step: f64,
+    /// Number of samples.
+    pub count: usize,
+    /// Flat-index distance between neighbours along the axis.
+    pub stride: usize,
+    /// Component 0..6 of the TCP pose that moves this axis's map coordinate, if any.
+    pub tcp: Option<usize>,
+}
+
+impl MapAxis {
+    /// Largest grid coordinate (count - 1).
+    pub fn top(&self) -> f32 {
+        (self.count - 1) as f32
+    }
+
+    /// SI value of grid coordinate `u`.
+    pub fn value(&self, u: f32) -> f64 {
+        self.min + f64::from(u) * self.step
+    }
+
+    /// Grid coordinate of SI value `x` (not clamped).
+    pub fn coord(&self, x: f64) -> f32 {
+        ((x - self.min) / self.step) as f32
+    }
+}
+
+/// The map prepared for lookups.
+#[derive(Debug, Clone)]
+pub struct Lookup {
+    axes: Vec<MapAxis>,
+    cells: Vec<[f32; LANES]>,
+    has_depth: bool,
+    approach: [f64; 3],
+}
+
+/// Which lookup the likelihood uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interpolation {
+    /// The cell nearest to the particle (the paper's lookup).
+    Nearest,
+    /// Multilinear between the 2^d surrounding cells.
+    Multilinear,
+}
+
+impl Lookup {
+    /// Prepares `map`; `path` names the file in errors (NaN cells, empty grid).
+    pub fn new(map: &FtMap, path: &Path) -> Result<Self> {
+        let grid = map.grid();
+        let bad = |reason: String| FusionError::Map {
+            path: path.to_owned(),
+            reason,
+        };
+        if grid.ndim() == 0 {
+            return Err(bad("the map has no uncertain DOF".into()));
+        }
+        let axes = grid
+            .axes()
+            .iter()
+            .enumerate()
+            .map(|(k, a)| MapAxis {
+                dof: a.dof,
+                min: a.min,
+                step: a.step,
+                count: a.count,
+                stride: grid.stride(k),
+                // Object DOFs move with the TCP (particle pose - TCP pose); z is the approach
+                // axis, whose TCP value is the measured contact height, not a displacement.
+                tcp: (a.dof.pose == Pose::Object && a.dof.axis != Axis::Z)
+                    .then_some(a.dof.axis.index()),
+            })
+            .collect();
+        let mut cells = Vec::with_capacity(grid.cells());
+        let mut depth_seen = false;
+        for i in 0..grid.cells() {
+            let c = map.cell(i);
+            if let Some(ch) = c.iter().position(|v| !v.is_finite()) {
+                return Err(bad(format!(
+                    "cell {i} has a non-finite value in channel {}",
+                    ftmap::CHANNELS[ch]
+                )));
+            }
+            depth_seen |= c[NCH - 1] != 0.0;
+            let mut padded = [0.0; LANES];
+            padded[..NCH].copy_from_slice(c);
+            cells.push(padded);
+        }
+        Ok(Self {
+            axes,
+            cells,
+            has_depth: depth_seen,
+            approach: map.meta().approach,
+        })
+    }
+
+    /// The axes in map order.
+    pub fn axes(&self) -> &[MapAxis] {
+        &self.axes
+    }
+
+    /// Number of axes.
+    pub fn ndim(&self) -> usize {
+        self.axes.len()
+    }
+
+    /// True when the depth channel holds values (not all zero).
+    pub fn has_depth(&self) -> bool {
+        self.has_depth
+    }
+
+    /// Height of a TCP position against the approach vector (the contact height at a contact).
+    pub fn height(&self, tcp: &[f64; 6]) -> f64 {
+        -(self.approach[0] * tcp[0] + self.approach[1] * tcp[1] + self.approach[2] * tcp[2])
+    }
+
+    /// The shift (grid units) that the TCP pose subtracts from each axis's coordinate.
+    pub fn tcp_shift(&self, tcp: &[f64; 6]) -> Vec<f32> {
+        self.axes
+            .iter()
+            .map(|a| a.tcp.map_or(0.0, |c| (tcp[c] / a.step) as f32))
+            .collect()
+    }
+
+    /// The padded channels at grid coordinates `u` (one per axis), multilinear, clamped.
+    pub fn at(&self, u: &[f32]) -> [f32; LANES] {
+        let mut out = [0.0; LANES];
+        let n = u.len().min(self.ndim());
+        let mut base = 0;
+        let mut frac = [0.0f32; ftmap::grid::MAX_AXES];
+        for (k, a) in self.axes.iter().enumerate().take(n) {
+            let t = u[k].clamp(0.0, a.top());
+            let i = (t as usize).min(a.count.saturating_sub(2));
+            base += i * a.stride;
+            frac[k] = if a.count > 1 { t - i as f32 } else { 0.0 };
+        }
+        for corner in 0..1usize << n {
+            let mut w = 1.0f32;
+            let mut idx = base;
+            for (k, a) in self.axes.iter().enumerate().take(n) {
+                if corner >> k & 1 == 1 {
+                    w *= frac[k];
+                    idx += if a.count > 1 { a.stride } else { 0 };
+                } else {
+                    w *= 1.0 - frac[k];
+                }
+            }
+            if w != 0.0 {
+                for (o, v) in out.iter_mut().zip(&self.cells[idx]) {
+                    *o += w * v;
+                }
+            }
+        }
+        out
+    }
+
+    /// Writes -1/2 of the weighted squared residual (Eq. 3 in log space, constants
+    /// dropped) of every particle into `out`. `pos` holds the particles' grid coordinates
+    /// axis-major (`pos[k * n + i]`), `shift` the TCP shift per axis, `meas` the measured
+    /// channels and `inv_var` 1/sigma^2 per channel (0 for unused ones).
+    pub fn log_likelihood(
+        &self,
+        interp: Interpolation,
+        pos: &[f32],
+        shift: &[f32],
+        meas: &[f32; LANES],
+        inv_var: &[f32; LANES],
+        out: &mut [f32],
+    ) {
+        macro_rules! dispatch {
+            ($($d:literal)*) => {
+                match (self.ndim(), interp) {
+                    $(
+                        ($d, Interpolation::Nearest) => self.ll_nearest::<$d>(pos, shift, meas, inv_var, out),
+                        ($d, Interpolation::Multilinear) => self.ll_linear::<$d>(pos, shift, meas, inv_var, out),
+                    )*
+                    _ => self.ll_any(interp, pos, shift, meas, inv_var, out),
+                }
+            };
+        }
+        dispatch!(1 2 3 4 5 6)
+    }
+
+    /// Clamped grid parameters of `D` axes: (top, last lower index, stride, stride to the upper neighbour).
+    fn axis_params<const D: usize>(&self) -> ([f32; D], [usize; D], [usize; D], [usize; D]) {
+        let mut top = [0.0; D];
+        let mut lo_max = [0; D];
+        let mut stride = [0; D];
+        let mut up = [0; D];
+        for (k, a) in self.axes.iter().enumerate().take(D) {
+            top[k] = a.top();
+            lo_max[k] = a.count.saturating_sub(2);
+            stride[k] = a.stride;
+            up[k] = if a.count > 1 { a.stride } else { 0 };
+        }
+        (top, lo_max, stride, up)
+    }
+
+    fn ll_nearest<const D: usize>(
+        &self,
+        pos: &[f32],
+        shift: &[f32],
+        meas: &[f32; LANES],
+        inv_var: &[f32; LANES],
+        out: &mut [f32],
+    ) {
+        let n = out.len();
+        let (top, _, stride, _) = self.axis_params::<D>();
+        for (i, o) in out.iter_mut().enumerate() {
+            let mut idx = 0;
+            for k in 0..D {
+                let t = (pos[k * n + i] - shift[k]).clamp(0.0, top[k]);
+                idx += (t + 0.5) as usize * stride[k];
+            }
+            *o = residual(&self.cells[idx], meas, inv_var);
+        }
+    }
+
+    fn ll_linear<const D: usize>(
+        &self,
+        pos: &[f32],
+        shift: &[f32],
+        meas: &[f32; LANES],
+        inv_var: &[f32; LANES],
+        out: &mut [f32],
+    ) {
+        let n = out.len();
+        let (top, lo_max, stride, up) = self.axis_params::<D>();
+        for (i, o) in out.iter_mut().enumerate() {
+            let mut base = 0;
+            let mut frac = [0.0f32; D];
+            for k in 0..D {
+                let t = (pos[k * n + i] - shift[k]).clamp(0.0, top[k]);
+                let lo = (t as usize).min(lo_max[k]);
+                base += lo * stride[k];
+                frac[k] = t - lo as f32;
+            }
+            let mut acc = [0.0f32; LANES];
+            for corner in 0..1usize << D {
+                let mut w = 1.0f32;
+                let mut idx = base;
+                for k in 0..D {
+                    if corner >> k & 1 == 1 {
+                        w *= frac[k];
+                        idx += up[k];
+                    } else {
+                        w *= 1.0 - frac[k];
+                    }
+                }
+                let cell = &self.cells[idx];
+                for l in 0..LANES {
+                    acc[l] += w * cell[l];
+                }
+            }
+            *o = residual(&acc, meas, inv_var);
+        }
+    }
+
+    fn ll_any(
+        &self,
+        interp: Interpolation,
+        pos: &[f32],
+        shift: &[f32],
+        meas: &[f32; LANES],
+        inv_var: &[f32; LANES],
+        out: &mut [f32],
+    ) {
+        let n = out.len();
+        let mut u = vec![0.0f32; self.ndim()];
+        for (i, o) in out.iter_mut().enumerate() {
+            for (k, a) in self.axes.iter().enumerate() {
+                let t = (pos[k * n + i] - shift[k]).clamp(0.0, a.top());
+                u[k] = match interp {
+                    Interpolation::Nearest => t.round(),
+                    Interpolation::Multilinear => t,
+                };
+            }
+            *o = residual(&self.at(&u), meas, inv_var);
+        }
+    }
+}
+
+/// -1/2 sum_l inv_var[l] (meas[l] - pred[l])^2.
+#[inline(always)]
+fn residual(pred: &[f32; LANES], meas: &[f32; LANES], inv_var: &[f32; LANES]) -> f32 {
+    let mut s = 0.0;
+    for l in 0..LANES {
+        let d = meas[l] - pred[l];
+        s += inv_var[l] * d * d;
+    }
+    -0.5 * s
+}

@@ -1,0 +1,352 @@
+//! The condensation particle filter (paper, section IV, Algorithm 1): particles over the
+//! map's uncertain DOFs, Eq. 3 in log space, systematic resampling, jitter, and the
+//! estimate (mode of the dominant cluster, spread, confidence).
+//!
+//! Particles live in grid units of the map's axes (`(x - min) / step`), axis-major. A
+//! particle holds its own pose (object pose relative to the nominal goal, grip offset);
+//! its map coordinate for an `object.*` DOF is its pose minus the TCP pose (Algorithm 1,
+//! step 13), `grip.*` DOFs are not moved by the TCP.
+
+mod estimate;
+mod lookup;
+mod resample;
+mod state;
+
+use std::path::Path;
+use std::sync::Arc;
+
+use ftmap::FtMap;
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rand_xoshiro::rand_core::{Rng, SeedableRng};
+
+pub use estimate::Estimate;
+pub use lookup::{Interpolation, LANES, Lookup, MapAxis};
+pub use state::{Reader, Writer};
+
+use crate::error::{FusionError, Result};
+
+/// Log-likelihood below which a particle's likelihood counts as underflowed: its linear
+/// weight would be below the smallest normal f32 (a residual of about 13 sigma).
+const UNDERFLOW: f32 = -87.33655;
+/// Share of the particles re-spread uniformly when every likelihood underflows.
+const RESPREAD_SHARE: f64 = 0.5;
+
+/// Settings of the filter (the FMU's parameters, checked).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Config {
+    /// Number of particles.
+    pub particles: usize,
+    /// Seed of the random numbers.
+    pub seed: u64,
+    /// Filter iterations per measurement.
+    pub iterations: usize,
+    /// Standard deviation of a force component (N).
+    pub sigma_force: f64,
+    /// Standard deviation of a torque component (N.m).
+    pub sigma_torque: f64,
+    /// Standard deviation of the contact height (m); 0: depth unused.
+    pub sigma_depth: f64,
+    /// Jitter standard deviation in grid intervals.
+    pub jitter: f64,
+    /// Confidence radius (m; rotations: the same number of grid intervals).
+    pub confidence_radius: f64,
+    /// Confidence above which the estimate counts as converged.
+    pub threshold: f64,
+    /// Map lookup.
+    pub interpolation: Interpolation,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            particles: 4000,
+            seed: 1,
+            iterations: 20,
+            sigma_force: 1.0,
+            sigma_torque: 0.01,
+            sigma_depth: 0.0005,
+            jitter: 0.2,
+            confidence_radius: 1e-4,
+            threshold: 0.9,
+            interpolation: Interpolation::Multilinear,
+        }
+    }
+}
+
+/// One contact measurement: the wrench in the sensor frame and the TCP pose.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Measurement {
+    /// fx fy fz (N), tx ty tz (N.m).
+    pub wrench: [f64; 6],
+    /// Task frame relative to the nominal goal: x y z (m), rx ry rz (rad).
+    pub tcp: [f64; 6],
+}
+
+/// What a measurement update did, beyond the new estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Report {
+    /// Iterations in which every likelihood underflowed and particles were re-spread.
+    pub respread: u32,
+    /// Iterations that resampled (ESS <= N/2).
+    pub resampled: u32,
+}
+
+/// The particle filter over one map.
+#[derive(Debug, Clone)]
+pub struct Filter {
+    lookup: Arc<Lookup>,
+    cfg: Config,
+    /// Grid coordinates, axis-major: `pos[k * n + i]`.
+    pos: Vec<f32>,
+    /// Normalised log weights (sum of exp = 1).
+    lw: Vec<f32>,
+    rng: Xoshiro256PlusPlus,
+    measurements: u32,
+    estimate: Estimate,
+    scratch: Scratch,
+}
+
+/// Buffers reused by every update (no allocation per iteration).
+#[derive(Debug, Clone, Default)]
+struct Scratch {
+    ll: Vec<f32>,
+    pos: Vec<f32>,
+    pick: Vec<u32>,
+}
+
+impl Filter {
+    /// A filter over `map` with particles uniform over Omega; `path` names the map in errors.
+    pub fn new(map: &FtMap, path: &Path, cfg: Config) -> Result<Self> {
+        Ok(Self::with_lookup(Arc::new(Lookup::new(map, path)?), cfg))
+    }
+
+    /// A filter over an already prepared map (shared between filters).
+    pub fn with_lookup(lookup: Arc<Lookup>, cfg: Config) -> Self {
+        let n = cfg.particles;
+        let d = lookup.ndim();
+        let mut f = Self {
+            lookup,
+            cfg,
+            pos: vec![0.0; n * d],
+            lw: vec![-(n as f32).ln(); n],
+            rng: Xoshiro256PlusPlus::seed_from_u64(cfg.seed),
+            measurements: 0,
+            estimate: Estimate::default(),
+            scratch: Scratch {
+                ll: vec![0.0; n],
+                pos: vec![0.0; n * d],
+                pick: vec![0; n],
+            },
+        };
+        for i in 0..n {
+            f.spread(i);
+        }
+        f.estimate = Estimate::compute(&f.lookup, &f.cfg, &f.pos, &f.lw);
+        f
+    }
+
+    /// The prepared map.
+    pub fn lookup(&self) -> &Arc<Lookup> {
+        &self.lookup
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// The current estimate.
+    pub fn estimate(&self) -> &Estimate {
+        &self.estimate
+    }
+
+    /// Measurements used so far.
+    pub fn measurements(&self) -> u32 {
+        self.measurements
+    }
+
+    /// Particle `i`'s pose value on map axis `k` (m or rad).
+    pub fn particle(&self, i: usize, k: usize) -> f64 {
+        self.lookup.axes()[k].value(self.pos[k * self.cfg.particles + i])
+    }
+
+    /// Normalised weight of particle `i`.
+    pub fn weight(&self, i: usize) -> f64 {
+        f64::from(self.lw[i]).exp()
+    }
+
+    /// Moves particle `i` to a uniform random place in Omega.
+    fn spread(&mut self, i: usize) {
+        let n = self.cfg.particles;
+        for (k, a) in self.lookup.axes().iter().enumerate() {
+            let u: f32 = unit(&mut self.rng);
+            self.pos[k * n + i] = u * a.top();
+        }
+    }
+
+    /// Checks a measurement: every value finite.
+    pub fn check(m: &Measurement) -> Result<()> {
+        const NAMES: [&str; 12] = [
+            "wrench.fx",
+            "wrench.fy",
+            "wrench.fz",
+            "wrench.tx",
+            "wrench.ty",
+            "wrench.tz",
+            "tcp.x",
+            "tcp.y",
+            "tcp.z",
+            "tcp.rx",
+            "tcp.ry",
+            "tcp.rz",
+        ];
+        match m
+            .wrench
+            .iter()
+            .chain(&m.tcp)
+            .zip(NAMES)
+            .find(|(v, _)| !v.is_finite())
+        {
+            Some((&value, name)) => Err(FusionError::NonFinite { name, value }),
+            None => Ok(()),
+        }
+    }
+
+    /// Takes one contact measurement: `iterations` rounds of weight (Eq. 3), normalise,
+    /// resample (when ESS <= N/2) and jitter, then a new estimate. A measurement with a
+    /// non-finite value is refused and changes nothing.
+    pub fn measure(&mut self, m: &Measurement) -> Result<Report> {
+        Self::check(m)?;
+        let c = &self.cfg;
+        let use_depth = c.sigma_depth > 0.0 && self.lookup.has_depth();
+        let mut meas = [0.0f32; LANES];
+        for (dst, &src) in meas.iter_mut().zip(&m.wrench) {
+            *dst = src as f32;
+        }
+        meas[6] = self.lookup.height(&m.tcp) as f32;
+        let (vf, vt) = (
+            (1.0 / (c.sigma_force * c.sigma_force)) as f32,
+            (1.0 / (c.sigma_torque * c.sigma_torque)) as f32,
+        );
+        let vd = if use_depth {
+            (1.0 / (c.sigma_depth * c.sigma_depth)) as f32
+        } else {
+            0.0
+        };
+        let inv_var = [vf, vf, vf, vt, vt, vt, vd, 0.0];
+        let shift = self.lookup.tcp_shift(&m.tcp);
+        let mut report = Report::default();
+        for _ in 0..self.cfg.iterations {
+            self.weigh(&shift, &meas, &inv_var, &mut report);
+            if self.ess() <= self.cfg.particles as f64 / 2.0 {
+                self.resample();
+                report.resampled += 1;
+            }
+            self.jitter();
+        }
+        self.measurements += 1;
+        self.estimate = Estimate::compute(&self.lookup, &self.cfg, &self.pos, &self.lw);
+        Ok(report)
+    }
+
+    /// Multiplies the weights by the likelihood and normalises (log-sum-exp); re-spreads a
+    /// share of the particles when every likelihood underflows.
+    fn weigh(
+        &mut self,
+        shift: &[f32],
+        meas: &[f32; LANES],
+        inv_var: &[f32; LANES],
+        report: &mut Report,
+    ) {
+        let interp = self.cfg.interpolation;
+        let mut ll = std::mem::take(&mut self.scratch.ll);
+        self.lookup
+            .log_likelihood(interp, &self.pos, shift, meas, inv_var, &mut ll);
+        let best = ll.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        if !(best >= UNDERFLOW) {
+            // No particle explains the measurement: start a share of them afresh, forget the
+            // old weights, and weigh again.
+            report.respread += 1;
+            let n = self.cfg.particles;
+            let step = (1.0 / RESPREAD_SHARE).round() as usize;
+            let offset = (self.rng.next_u64() % step as u64) as usize;
+            for i in (offset..n).step_by(step) {
+                self.spread(i);
+            }
+            self.lookup
+                .log_likelihood(interp, &self.pos, shift, meas, inv_var, &mut ll);
+            self.lw.fill(0.0);
+        }
+        for (w, l) in self.lw.iter_mut().zip(&ll) {
+            *w += l;
+        }
+        normalise(&mut self.lw);
+        self.scratch.ll = ll;
+    }
+
+    /// Effective sample size 1 / sum w^2.
+    pub fn ess(&self) -> f64 {
+        let s: f64 = self.lw.iter().map(|&l| (2.0 * f64::from(l)).exp()).sum();
+        if s > 0.0 { 1.0 / s } else { 0.0 }
+    }
+
+    /// Systematic resampling; weights become uniform.
+    fn resample(&mut self) {
+        let n = self.cfg.particles;
+        let u0: f64 = unit::<f64>(&mut self.rng);
+        resample::systematic(&self.lw, u0, &mut self.scratch.pick);
+        let d = self.lookup.ndim();
+        for k in 0..d {
+            let (src, dst) = (
+                &self.pos[k * n..(k + 1) * n],
+                &mut self.scratch.pos[k * n..(k + 1) * n],
+            );
+            for (o, &j) in dst.iter_mut().zip(&self.scratch.pick) {
+                *o = src[j as usize];
+            }
+        }
+        std::mem::swap(&mut self.pos, &mut self.scratch.pos);
+        self.lw.fill(-(n as f32).ln());
+    }
+
+    /// Gaussian jitter of `jitter` grid intervals on every axis, clamped into Omega.
+    fn jitter(&mut self) {
+        let n = self.cfg.particles;
+        let s = self.cfg.jitter as f32;
+        if s == 0.0 {
+            return;
+        }
+        for (k, a) in self.lookup.axes().iter().enumerate() {
+            let top = a.top();
+            if top == 0.0 {
+                continue;
+            }
+            for p in &mut self.pos[k * n..(k + 1) * n] {
+                let z: f32 = StandardNormal.sample(&mut self.rng);
+                *p = (*p + s * z).clamp(0.0, top);
+            }
+        }
+    }
+}
+
+/// A uniform number in [0, 1).
+fn unit<T>(rng: &mut Xoshiro256PlusPlus) -> T
+where
+    rand_distr::StandardUniform: Distribution<T>,
+{
+    rand_distr::StandardUniform.sample(rng)
+}
+
+/// Shifts log weights so that their exponentials sum to 1 (log-sum-exp).
+fn normalise(lw: &mut [f32]) {
+    let max = lw.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let sum: f64 = lw.iter().map(|&l| f64::from(l - max).exp()).sum();
+    let shift = max + sum.ln() as f32;
+    for l in lw.iter_mut() {
+        *l -= shift;
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,164 @@
+//! The filter's state as bytes, for the FMU's saved and serialized states: particles,
+//! weights, the random generator and the measurement count, so that a restored filter
+//! replays bit for bit. The estimate is recomputed on restore.
+
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+use super::{Estimate, Filter};
+use crate::error::{FusionError, Result};
+
+/// Appends little-endian values to a byte buffer.
+#[derive(Debug, Default)]
+pub struct Writer(pub Vec<u8>);
+
+impl Writer {
+    /// Appends a u32.
+    pub fn u32(&mut self, v: u32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// Appends an f64.
+    pub fn f64(&mut self, v: f64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// Appends a length-prefixed byte string.
+    pub fn bytes(&mut self, b: &[u8]) {
+        self.u32(b.len() as u32);
+        self.0.extend_from_slice(b);
+    }
+
+    /// Appends f32 values (no length).
+    pub fn f32s(&mut self, v: &[f32]) {
+        for x in v {
+            self.0.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+}
+
+/// Reads what [`Writer`] wrote, refusing short input.
+#[derive(Debug)]
+pub struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    /// Reads `bytes` from the start.
+    pub fn new(bytes: &'a [u8]) -> Self {
+        Self { bytes, at: 0 }
+    }
+
+    /// The next `len` bytes.
+    pub fn take(&mut self, len: usize) -> Result<&'a [u8]> {
+        let end = self
+            .at
+            .checked_add(len)
+            .filter(|&e| e <= self.bytes.len())
+            .ok_or_else(|| {
+                FusionError::State(format!(
+                    "truncated: needs {len} bytes at offset {}, has {}",
+                    self.at,
+                    self.bytes.len()
+                ))
+            })?;
+        let s = &self.bytes[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+
+    /// The next u32.
+    pub fn u32(&mut self) -> Result<u32> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// The next f64.
+    pub fn f64(&mut self) -> Result<f64> {
+        let b = self.take(8)?;
+        let mut a = [0u8; 8];
+        a.copy_from_slice(b);
+        Ok(f64::from_le_bytes(a))
+    }
+
+    /// The next length-prefixed byte string.
+    pub fn bytes(&mut self) -> Result<&'a [u8]> {
+        let len = self.u32()? as usize;
+        self.take(len)
+    }
+
+    /// The next `out.len()` f32 values.
+    pub fn f32s(&mut self, out: &mut [f32]) -> Result<()> {
+        let b = self.take(out.len() * 4)?;
+        for (o, c) in out.iter_mut().zip(b.chunks_exact(4)) {
+            *o = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+        }
+        Ok(())
+    }
+
+    /// True when everything was read.
+    pub fn done(&self) -> bool {
+        self.at == self.bytes.len()
+    }
+}
+
+impl Filter {
+    /// Writes the filter's dynamic state (with a fingerprint of its map and size).
+    pub fn save(&self, w: &mut Writer) {
+        w.u32(self.cfg.particles as u32);
+        w.u32(self.lookup.ndim() as u32);
+        for a in self.lookup.axes() {
+            w.u32(a.count as u32);
+            w.f64(a.min);
+            w.f64(a.step);
+        }
+        w.f32s(&self.pos);
+        w.f32s(&self.lw);
+        w.u32(self.measurements);
+        // Serializing four u64 into JSON cannot fail.
+        w.bytes(
+            serde_json::to_string(&self.rng)
+                .unwrap_or_default()
+                .as_bytes(),
+        );
+    }
+
+    /// Restores what [`Filter::save`] wrote; refuses a state of another map or particle
+    /// count and leaves the filter unchanged then.
+    pub fn restore(&mut self, r: &mut Reader<'_>) -> Result<()> {
+        let n = r.u32()? as usize;
+        let d = r.u32()? as usize;
+        if n != self.cfg.particles || d != self.lookup.ndim() {
+            return Err(FusionError::State(format!(
+                "saved with {n} particles over {d} DOFs, this instance has {} over {}",
+                self.cfg.particles,
+                self.lookup.ndim()
+            )));
+        }
+        for a in self.lookup.axes() {
+            let (count, min, step) = (r.u32()? as usize, r.f64()?, r.f64()?);
+            if count != a.count || min != a.min || step != a.step {
+                return Err(FusionError::State(format!(
+                    "saved over another map (axis {} differs)",
+                    a.dof
+                )));
+            }
+        }
+        let mut pos = vec![0.0; n * d];
+        let mut lw = vec![0.0; n];
+        r.f32s(&mut pos)?;
+        r.f32s(&mut lw)?;
+        let measurements = r.u32()?;
+        let rng: Xoshiro256PlusPlus = serde_json::from_slice(r.bytes()?)
+            .map_err(|e| FusionError::State(format!("random generator state: {e}")))?;
+        if pos.iter().chain(&lw).any(|v| v.is_nan()) {
+            return Err(FusionError::State("NaN in the particles".into()));
+        }
+        self.pos = pos;
+        self.lw = lw;
+        self.measurements = measurements;
+        self.rng = rng;
+        self.estimate = Estimate::compute(&self.lookup, &self.cfg, &self.pos, &self.lw);
+        Ok(())
+    }
+}

@@ -1,0 +1,312 @@
+//! Tests of the filter against measurements read from an analytic map at true poses
+//! chosen here.
+
+use std::path::Path;
+
+use rand_distr::{Distribution, Normal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rand_xoshiro::rand_core::SeedableRng;
+
+use super::state::{Reader, Writer};
+use super::*;
+use crate::synthetic::{field, peg_map};
+
+const STEP: f64 = 2.5e-4;
+
+fn filter(seed: u64) -> Filter {
+    let map = peg_map(5e-3, STEP, None).expect("map");
+    Filter::new(
+        &map,
+        Path::new("synthetic"),
+        Config {
+            seed,
+            particles: 4000,
+            ..Config::default()
+        },
+    )
+    .expect("filter")
+}
+
+/// The measurement at true object offset (x, y) seen from TCP position (tx, ty), with
+/// torque noise of `noise` N.m.
+fn measurement(
+    x: f64,
+    y: f64,
+    tcp: [f64; 2],
+    noise: f64,
+    rng: &mut Xoshiro256PlusPlus,
+) -> Measurement {
+    let w = field(x - tcp[0], y - tcp[1], 0.0, 0.0);
+    let n = Normal::new(0.0, noise).expect("normal");
+    let mut wrench = [0.0; 6];
+    for (k, o) in wrench.iter_mut().enumerate() {
+        *o = f64::from(w[k]) + if k >= 3 { n.sample(rng) } else { 0.0 };
+    }
+    Measurement {
+        wrench,
+        tcp: [tcp[0], tcp[1], f64::from(w[6]), 0.0, 0.0, 0.0],
+    }
+}
+
+fn error(f: &Filter, truth: [f64; 2]) -> f64 {
+    let e = &f.estimate().pose;
+    (e[0] - truth[0]).hypot(e[1] - truth[1])
+}
+
+#[test]
+fn repeated_measurements_at_a_true_pose_converge_within_one_grid_step() {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+    for (seed, truth) in [
+        (1, [2.3e-3, -1.1e-3]),
+        (2, [-3.7e-3, 0.6e-3]),
+        (3, [0.9e-3, 4.1e-3]),
+    ] {
+        let mut f = filter(seed);
+        for _ in 0..5 {
+            f.measure(&measurement(truth[0], truth[1], [0.0, 0.0], 1e-3, &mut rng))
+                .expect("finite");
+        }
+        let est = f.estimate();
+        assert!(
+            error(&f, truth) < STEP,
+            "truth {truth:?}: estimate {:?}, {est:?}",
+            est.pose
+        );
+        assert!(est.pose.iter().chain(&est.std).all(|v| v.is_finite()));
+        assert_eq!(f.measurements(), 5);
+        assert_eq!(est.clusters, 1, "{est:?}");
+    }
+}
+
+#[test]
+fn moving_the_tcp_to_the_estimate_finds_the_hole_in_a_few_contacts() {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
+    let mut counts = Vec::new();
+    for (seed, truth) in [
+        (4, [3.1e-3, 2.2e-3]),
+        (5, [-1.4e-3, -4.3e-3]),
+        (6, [4.4e-3, -0.2e-3]),
+    ] {
+        let mut f = filter(seed);
+        let mut tcp = [0.0f64, 0.0];
+        let mut contacts = 0;
+        while (tcp[0] - truth[0]).hypot(tcp[1] - truth[1]) > STEP && contacts < 12 {
+            f.measure(&measurement(truth[0], truth[1], tcp, 1e-3, &mut rng))
+                .expect("finite");
+            contacts += 1;
+            tcp = [f.estimate().pose[0], f.estimate().pose[1]];
+        }
+        assert!(
+            contacts < 12,
+            "truth {truth:?}: still {:?} after 12 contacts",
+            tcp
+        );
+        counts.push(contacts);
+    }
+    eprintln!("contacts until the TCP is within one grid step: {counts:?}");
+}
+
+#[test]
+fn equal_seeds_give_equal_particles_and_other_seeds_do_not() {
+    let m = measurement(
+        1e-3,
+        2e-3,
+        [0.0, 0.0],
+        0.0,
+        &mut Xoshiro256PlusPlus::seed_from_u64(0),
+    );
+    let (mut a, mut b, mut c) = (filter(9), filter(9), filter(10));
+    for f in [&mut a, &mut b, &mut c] {
+        f.measure(&m).expect("finite");
+    }
+    assert_eq!(a.pos, b.pos);
+    assert_eq!(a.estimate(), b.estimate());
+    assert_ne!(a.pos, c.pos);
+}
+
+#[test]
+fn a_restored_state_replays_bit_for_bit() {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
+    let ms: Vec<Measurement> = (0..3)
+        .map(|_| measurement(-2e-3, 1e-3, [0.0, 0.0], 2e-3, &mut rng))
+        .collect();
+    let mut f = filter(12);
+    f.measure(&ms[0]).expect("finite");
+    let mut w = Writer::default();
+    f.save(&mut w);
+    f.measure(&ms[1]).expect("finite");
+    f.measure(&ms[2]).expect("finite");
+    let (pos, est) = (f.pos.clone(), f.estimate().clone());
+
+    let mut g = filter(99);
+    let mut r = Reader::new(&w.0);
+    g.restore(&mut r).expect("same map and size");
+    assert!(r.done());
+    assert_eq!(g.measurements(), 1);
+    g.measure(&ms[1]).expect("finite");
+    g.measure(&ms[2]).expect("finite");
+    assert_eq!(g.pos, pos);
+    assert_eq!(g.estimate(), &est);
+
+    let other = Filter::new(
+        &peg_map(5e-3, 5e-4, None).expect("map"),
+        Path::new("coarse"),
+        Config {
+            particles: 4000,
+            ..Config::default()
+        },
+    )
+    .expect("filter");
+    let mut w2 = Writer::default();
+    other.save(&mut w2);
+    let before = g.pos.clone();
+    assert!(matches!(
+        g.restore(&mut Reader::new(&w2.0)),
+        Err(FusionError::State(_))
+    ));
+    assert!(g.restore(&mut Reader::new(&w.0[..w.0.len() - 3])).is_err());
+    assert_eq!(g.pos, before, "a refused state leaves the filter as it was");
+}
+
+#[test]
+fn an_impossible_measurement_re_spreads_particles_and_never_gives_nan() {
+    let mut f = filter(13);
+    // Far from where the impossible torque pulls the particles (large +tx: small +y), so
+    // that the next sound measurement underflows too and re-spreads them again.
+    let truth = [-3e-3, -2e-3];
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+    f.measure(&measurement(truth[0], truth[1], [0.0, 0.0], 1e-3, &mut rng))
+        .expect("finite");
+    let mut crazy = measurement(truth[0], truth[1], [0.0, 0.0], 0.0, &mut rng);
+    crazy.wrench[3] = 100.0;
+    let report = f.measure(&crazy).expect("finite");
+    assert!(report.respread > 0, "{report:?}");
+    let est = f.estimate();
+    assert!(
+        est.pose
+            .iter()
+            .chain(&est.std)
+            .chain([&est.confidence, &est.ess])
+            .all(|v| v.is_finite()),
+        "{est:?}"
+    );
+    assert!(f.lw.iter().all(|l| l.is_finite()));
+    // Sound measurements afterwards find the pose again.
+    let mut respread = 0;
+    for _ in 0..5 {
+        respread += f
+            .measure(&measurement(truth[0], truth[1], [0.0, 0.0], 1e-3, &mut rng))
+            .expect("finite")
+            .respread;
+    }
+    assert!(respread > 0);
+    assert!(error(&f, truth) < 2.0 * STEP, "{:?}", f.estimate());
+}
+
+#[test]
+fn a_non_finite_measurement_is_refused_and_changes_nothing() {
+    let mut f = filter(14);
+    let before = (f.pos.clone(), f.estimate().clone());
+    let mut m = Measurement::default();
+    m.tcp[4] = f64::NAN;
+    match f.measure(&m) {
+        Err(FusionError::NonFinite { name, .. }) => assert_eq!(name, "tcp.ry"),
+        other => panic!("{other:?}"),
+    }
+    m.tcp[4] = 0.0;
+    m.wrench[0] = f64::INFINITY;
+    assert!(f.measure(&m).is_err());
+    assert_eq!((f.pos.clone(), f.estimate().clone()), before);
+    assert_eq!(f.measurements(), 0);
+}
+
+#[test]
+fn the_uniform_start_covers_omega_and_is_not_converged() {
+    let f = filter(15);
+    let est = f.estimate();
+    assert!(!est.converged && est.confidence < 0.05, "{est:?}");
+    assert!((est.ess - 4000.0).abs() < 1e-6 * 4000.0);
+    for k in 0..2 {
+        let (lo, hi) = (0..4000)
+            .map(|i| f.particle(i, k))
+            .fold((1.0f64, -1.0f64), |(a, b), x| (a.min(x), b.max(x)));
+        assert!(
+            lo >= -5e-3 - 1e-12 && hi <= 5e-3 + 1e-12 && lo < -4.9e-3 && hi > 4.9e-3,
+            "{lo} {hi}"
+        );
+    }
+}
+
+#[test]
+fn two_symmetric_hypotheses_are_counted_as_two_clusters() {
+    // A field that only sees |x|: poses +x and -x explain a measurement equally (like the
+    // paper's gear case).
+    let map = peg_map(5e-3, STEP, None).expect("map");
+    let mut sym = map.clone();
+    for cell in 0..map.grid().cells() {
+        let c = map.grid().coords(cell);
+        *sym.cell_mut(cell) = field(c[0].abs(), c[1], 0.0, 0.0);
+    }
+    let mut f = Filter::new(
+        &sym,
+        Path::new("sym"),
+        Config {
+            particles: 4000,
+            seed: 3,
+            ..Config::default()
+        },
+    )
+    .expect("filter");
+    let w = field(3e-3, 1e-3, 0.0, 0.0);
+    let wrench = [w[0], w[1], w[2], w[3], w[4], w[5]].map(f64::from);
+    f.measure(&Measurement {
+        wrench,
+        tcp: [0.0, 0.0, f64::from(w[6]), 0.0, 0.0, 0.0],
+    })
+    .expect("finite");
+    let est = f.estimate();
+    assert_eq!(est.clusters, 2, "{est:?}");
+    assert!((est.pose[0].abs() - 3e-3).abs() < STEP, "{est:?}");
+}
+
+#[test]
+fn nearest_lookup_reads_cells_and_multilinear_interpolates() {
+    let map = peg_map(5e-3, STEP, None).expect("map");
+    let lookup = Lookup::new(&map, Path::new("m")).expect("lookup");
+    let u = [lookup.axes()[0].coord(2e-3), lookup.axes()[1].coord(-1e-3)];
+    let exact = map.interpolate(&[2e-3, -1e-3]).expect("2 coords");
+    let got = lookup.at(&u);
+    for ch in 0..7 {
+        assert!(
+            (f64::from(got[ch]) - exact[ch]).abs() < 1e-6,
+            "channel {ch}"
+        );
+    }
+    let half = [u[0] + 0.5, u[1] + 0.25];
+    let want = map
+        .interpolate(&[2e-3 + 0.5 * STEP, -1e-3 + 0.25 * STEP])
+        .expect("2 coords");
+    let mut ll = [0.0f32; 1];
+    let meas: [f32; LANES] = std::array::from_fn(|l| if l < 7 { want[l] as f32 } else { 0.0 });
+    let inv = [1.0f32; LANES];
+    lookup.log_likelihood(
+        Interpolation::Multilinear,
+        &half,
+        &[0.0, 0.0],
+        &meas,
+        &inv,
+        &mut ll,
+    );
+    assert!(ll[0].abs() < 1e-9, "{}", ll[0]);
+    lookup.log_likelihood(
+        Interpolation::Nearest,
+        &[u[0] + 0.4, u[1] - 0.4],
+        &[0.0, 0.0],
+        &meas,
+        &inv,
+        &mut ll,
+    );
+    let cell = map.nearest(&[2e-3, -1e-3]).expect("2 coords");
+    let r: f32 = (0..7).map(|l| (meas[l] - cell[l]).powi(2)).sum();
+    assert!((ll[0] + 0.5 * r).abs() < 1e-6);
+}

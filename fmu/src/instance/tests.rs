@@ -1,0 +1,287 @@
+//! Tests of the instance layer: the state machine, parameters, maps, measurements through
+//! doStep, and saved states.
+
+use std::cell::RefCell;
+use std::path::PathBuf;
+use std::rc::Rc;
+
+use super::*;
+use crate::synthetic::{field, peg_map};
+
+/// A resources folder holding the synthetic map as `peg.ftmap` and a corrupt copy.
+fn resources() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("ftfusion-instance-{}", std::process::id()));
+    let map = peg_map(5e-3, 2.5e-4, None).expect("map");
+    ftmap::format::save(&map, &dir.join("peg.ftmap")).expect("write map");
+    let mut bytes = ftmap::format::to_bytes(&map);
+    let at = bytes.len() / 2;
+    bytes[at] ^= 0x40;
+    std::fs::write(dir.join("corrupt.ftmap"), bytes).expect("write corrupt map");
+    dir
+}
+
+type Log = Rc<RefCell<Vec<(Status, String)>>>;
+
+fn instance() -> (Instance, Log) {
+    let log: Log = Rc::default();
+    let sink = log.clone();
+    let logger: Logger = Box::new(move |s, _c, m| sink.borrow_mut().push((s, m.to_owned())));
+    (Instance::new("test", Some(resources()), logger, false), log)
+}
+
+fn vr(name: &str) -> u32 {
+    model_description::by_name(name).expect("variable").vr
+}
+
+fn set_string(i: &mut Instance, name: &str, v: &str) -> Result<Status> {
+    i.set(VarType::String, &[vr(name)], vec![Value::String(v.into())])
+}
+
+fn set_int(i: &mut Instance, name: &str, v: i32) -> Result<Status> {
+    i.set(VarType::Integer, &[vr(name)], vec![Value::Integer(v)])
+}
+
+fn set_reals(i: &mut Instance, names: &[&str], v: &[f64]) -> Result<Status> {
+    let vrs: Vec<u32> = names.iter().map(|n| vr(n)).collect();
+    i.set(
+        VarType::Real,
+        &vrs,
+        v.iter().map(|&x| Value::Real(x)).collect(),
+    )
+}
+
+fn real(i: &Instance, name: &str) -> f64 {
+    let mut out = [0.0];
+    i.get(VarType::Real, &[vr(name)], &mut out, |v| match v {
+        Value::Real(x) => *x,
+        _ => f64::NAN,
+    })
+    .expect("readable");
+    out[0]
+}
+
+fn initialized() -> (Instance, Log) {
+    let (mut i, log) = instance();
+    set_string(&mut i, "map", "peg.ftmap").expect("parameter");
+    set_int(&mut i, "particles", 2000).expect("parameter");
+    i.enter_initialization_mode().expect("allowed");
+    i.exit_initialization_mode()
+        .expect("valid parameters and map");
+    (i, log)
+}
+
+/// Feeds the contact at true offset `truth` seen from `tcp`, with a rising contact edge.
+fn contact(i: &mut Instance, t: f64, truth: [f64; 2], tcp: [f64; 2]) -> Status {
+    let w = field(truth[0] - tcp[0], truth[1] - tcp[1], 0.0, 0.0).map(f64::from);
+    let names = [
+        "wrench.fx",
+        "wrench.fy",
+        "wrench.fz",
+        "wrench.tx",
+        "wrench.ty",
+        "wrench.tz",
+        "tcp.x",
+        "tcp.y",
+        "tcp.z",
+    ];
+    set_reals(
+        i,
+        &names,
+        &[w[0], w[1], w[2], w[3], w[4], w[5], tcp[0], tcp[1], w[6]],
+    )
+    .expect("inputs");
+    i.set(
+        VarType::Boolean,
+        &[vr("contact")],
+        vec![Value::Boolean(true)],
+    )
+    .expect("input");
+    let s = i.do_step(t, 0.1).expect("step");
+    i.set(
+        VarType::Boolean,
+        &[vr("contact")],
+        vec![Value::Boolean(false)],
+    )
+    .expect("input");
+    i.do_step(t + 0.1, 0.1).expect("step");
+    s
+}
+
+#[test]
+fn contacts_through_do_step_move_the_outputs_to_the_true_offset() {
+    let (mut i, _) = initialized();
+    let truth = [2.1e-3, -3.3e-3];
+    for k in 0..4 {
+        assert_eq!(contact(&mut i, k as f64, truth, [0.0, 0.0]), Status::Ok);
+    }
+    assert!(
+        (real(&i, "object.x") - truth[0]).abs() < 2.5e-4,
+        "{}",
+        real(&i, "object.x")
+    );
+    assert!(
+        (real(&i, "object.y") - truth[1]).abs() < 2.5e-4,
+        "{}",
+        real(&i, "object.y")
+    );
+    assert_eq!(real(&i, "object.z"), 0.0, "DOFs outside the map stay 0");
+    assert_eq!(real(&i, "grip.x"), 0.0);
+    let mut n = [0];
+    i.get(VarType::Integer, &[vr("measurements")], &mut n, |v| {
+        if let Value::Integer(x) = v { *x } else { -1 }
+    })
+    .expect("readable");
+    assert_eq!(
+        n,
+        [4],
+        "one measurement per rising edge, none while contact stays high"
+    );
+}
+
+#[test]
+fn calls_in_the_wrong_state_are_refused_and_leave_the_instance_as_it_was() {
+    let (mut i, log) = instance();
+    let r = i.do_step(0.0, 0.1);
+    assert_eq!(i.finish(Call::DoStep, r), Status::Error);
+    assert_eq!(i.mode(), Mode::Instantiated);
+    assert!(
+        log.borrow()
+            .last()
+            .is_some_and(|(s, m)| *s == Status::Error && m.contains("fmi2DoStep"))
+    );
+    let r = i.exit_initialization_mode();
+    assert!(matches!(r, Err(FusionError::IllegalCall { .. })));
+    let (mut i, _) = initialized();
+    assert!(matches!(
+        set_int(&mut i, "particles", 100),
+        Err(FusionError::BadArgument(_))
+    ));
+    assert!(set_reals(&mut i, &["object.x"], &[1.0]).is_err());
+    assert!(i.enter_initialization_mode().is_err());
+    assert_eq!(i.mode(), Mode::StepComplete);
+    assert_eq!(contact(&mut i, 0.0, [1e-3, 1e-3], [0.0, 0.0]), Status::Ok);
+}
+
+#[test]
+fn a_parameter_out_of_range_fails_initialization_naming_it_and_its_range() {
+    let (mut i, log) = instance();
+    set_string(&mut i, "map", "peg.ftmap").expect("parameter");
+    set_int(&mut i, "iterations", 0).expect("values are checked at initialization");
+    i.enter_initialization_mode().expect("allowed");
+    let r = i.exit_initialization_mode();
+    assert_eq!(i.finish(Call::ExitInitializationMode, r), Status::Error);
+    let msg = log
+        .borrow()
+        .last()
+        .map(|(_, m)| m.clone())
+        .unwrap_or_default();
+    assert!(
+        msg.contains("`iterations`") && msg.contains("[1, 1000]"),
+        "{msg}"
+    );
+    assert_eq!(i.mode(), Mode::Error);
+    i.reset().expect("reset is allowed after an error");
+    assert_eq!(i.mode(), Mode::Instantiated);
+}
+
+#[test]
+fn missing_and_corrupt_maps_fail_initialization_naming_the_file_and_the_problem() {
+    for (name, problem) in [
+        ("nothere.ftmap", "No such file"),
+        ("corrupt.ftmap", "checksum"),
+    ] {
+        let (mut i, _) = instance();
+        set_string(&mut i, "map", name).expect("parameter");
+        i.enter_initialization_mode().expect("allowed");
+        let e = i
+            .exit_initialization_mode()
+            .expect_err("bad map")
+            .to_string();
+        assert!(e.contains(name) && e.contains(problem), "{e}");
+    }
+    let (mut i, _) = instance();
+    set_string(&mut i, "map", "/does/not/exist.ftmap").expect("parameter");
+    i.enter_initialization_mode().expect("allowed");
+    assert!(
+        i.exit_initialization_mode()
+            .expect_err("bad map")
+            .to_string()
+            .contains("/does/not/exist.ftmap")
+    );
+}
+
+#[test]
+fn a_nan_input_skips_its_measurement_with_a_warning() {
+    let (mut i, log) = initialized();
+    contact(&mut i, 0.0, [1e-3, 2e-3], [0.0, 0.0]);
+    let before = real(&i, "object.x");
+    assert_eq!(
+        set_reals(&mut i, &["wrench.tx"], &[f64::NAN]).expect("stored"),
+        Status::Warning
+    );
+    i.set(
+        VarType::Boolean,
+        &[vr("contact")],
+        vec![Value::Boolean(true)],
+    )
+    .expect("input");
+    assert_eq!(i.do_step(1.0, 0.1).expect("step"), Status::Warning);
+    assert_eq!(real(&i, "object.x"), before);
+    assert!(
+        log.borrow()
+            .iter()
+            .any(|(s, m)| *s == Status::Warning && m.contains("wrench.tx"))
+    );
+    i.set(
+        VarType::Boolean,
+        &[vr("contact")],
+        vec![Value::Boolean(false)],
+    )
+    .expect("input");
+    i.do_step(1.1, 0.1).expect("the run goes on");
+    assert_eq!(contact(&mut i, 2.0, [1e-3, 2e-3], [0.0, 0.0]), Status::Ok);
+}
+
+#[test]
+fn a_restored_state_replays_the_same_outputs_and_foreign_bytes_are_refused() {
+    let (mut i, _) = initialized();
+    contact(&mut i, 0.0, [-1e-3, 3e-3], [0.0, 0.0]);
+    let saved = i.save_state().expect("allowed");
+    contact(&mut i, 1.0, [-1e-3, 3e-3], [1e-3, 1e-3]);
+    let first = (
+        real(&i, "object.x"),
+        real(&i, "object.y"),
+        real(&i, "confidence"),
+    );
+    i.restore_state(&saved).expect("own state");
+    contact(&mut i, 1.0, [-1e-3, 3e-3], [1e-3, 1e-3]);
+    assert_eq!(
+        (
+            real(&i, "object.x"),
+            real(&i, "object.y"),
+            real(&i, "confidence")
+        ),
+        first
+    );
+
+    let mut foreign = saved.clone();
+    foreign[0] = b'X';
+    assert!(matches!(
+        i.restore_state(&foreign),
+        Err(FusionError::State(_))
+    ));
+    assert!(i.restore_state(&saved[..saved.len() - 1]).is_err());
+    let (fresh, _) = instance();
+    assert!(
+        i.restore_state(&fresh.save_state().expect("allowed"))
+            .is_err()
+    );
+    assert_eq!(
+        (
+            real(&i, "object.x"),
+            real(&i, "object.y"),
+            real(&i, "confidence")
+        ),
+        first
+    );
+}
