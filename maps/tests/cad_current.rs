@@ -7,7 +7,7 @@ use ftmap::Task;
 use ftmap::cad::{self, Role};
 use ftmap::mesh::Mesh;
 
-const REGENERATE: &str = "cargo run -p ftmap --example write_cad";
+const REGENERATE: &str = "cargo run --release -p ftmap -- cad (or target/release/ftmap cad)";
 
 fn models() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../models_mjcf")
