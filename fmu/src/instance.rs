@@ -583,23 +583,7 @@ impl Instance {
     /// and then leaves the instance unchanged.
     pub fn restore_state(&mut self, bytes: &[u8]) -> Result<Status> {
         self.check(Call::State("fmi2SetFMUstate"))?;
-        let mut r = Reader::new(bytes);
-        if r.take(STATE_MAGIC.len()).ok() != Some(&STATE_MAGIC[..]) {
-            return Err(FusionError::State(
-                "not an FtFusion state (magic bytes differ)".into(),
-            ));
-        }
-        let version = r.u32()?;
-        if version != STATE_VERSION {
-            return Err(FusionError::State(format!(
-                "state version {version}, this build reads {STATE_VERSION}"
-            )));
-        }
-        if r.bytes()? != model_description::guid().as_bytes() {
-            return Err(FusionError::State(
-                "saved by an FMU with another interface (GUID differs)".into(),
-            ));
-        }
+        let mut r = Self::state_header(bytes)?;
         let store = Store::restore(&mut r)?;
         let prev_contact = r.u32()? != 0;
         let time = r.f64()?;
@@ -646,6 +630,38 @@ impl Instance {
         self.prev_contact = prev_contact;
         self.time = time;
         Ok(Status::Ok)
+    }
+
+    /// Errors unless `bytes` start like a state of this FMU (magic, version, GUID).
+    pub fn check_state_bytes(bytes: &[u8]) -> Result<()> {
+        Self::state_header(bytes).map(|_| ())
+    }
+
+    /// Reads the header of state bytes; the reader stands after it.
+    fn state_header(bytes: &[u8]) -> Result<Reader<'_>> {
+        let mut r = Reader::new(bytes);
+        if r.take(STATE_MAGIC.len()).ok() != Some(&STATE_MAGIC[..]) {
+            return Err(FusionError::State(
+                "not an FtFusion state (magic bytes differ)".into(),
+            ));
+        }
+        let version = r.u32()?;
+        if version != STATE_VERSION {
+            return Err(FusionError::State(format!(
+                "state version {version}, this build reads {STATE_VERSION}"
+            )));
+        }
+        if r.bytes()? != model_description::guid().as_bytes() {
+            return Err(FusionError::State(
+                "saved by an FMU with another interface (GUID differs)".into(),
+            ));
+        }
+        Ok(r)
+    }
+
+    /// Puts the instance into the Error state after an internal failure (a caught panic).
+    pub fn poison(&mut self) {
+        self.mode = Mode::Error;
     }
 
     /// The answer to a function FtFusion does not provide.

@@ -1,1 +1,318 @@
-fn main() {}
+//! Developer tasks of the ftfusion workspace, run as `cargo xtask <task>`:
+//! - `fmu`: builds `target/fmu/FtFusion.fmu` (release cdylib, modelDescription.xml, the
+//!   default `peg_in_hole` map in resources/, documentation/index.html);
+//! - `bench-filter`: the filter benchmark (Rust) next to the same update in NumPy.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use anyhow::{Context, Result, bail};
+use model_description::{Causality, Start, VARIABLES};
+use sha2::{Digest, Sha256};
+
+/// The task whose map the FMU carries by default.
+const DEFAULT_TASK: &str = "peg_in_hole";
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match args.first().map(String::as_str) {
+        Some("fmu") => fmu(),
+        Some("bench-filter") => bench(&args[1..]),
+        _ => {
+            eprintln!(
+                "usage: cargo xtask fmu | cargo xtask bench-filter [--particles N] [--iterations K]"
+            );
+            bail!("unknown or missing task")
+        }
+    }
+}
+
+/// The workspace root (the parent of this crate's folder).
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap_or(Path::new("."))
+        .to_owned()
+}
+
+/// Runs a command in the workspace root, failing on a non-zero exit.
+fn run(cmd: &mut Command) -> Result<()> {
+    let status = cmd
+        .current_dir(root())
+        .status()
+        .with_context(|| format!("starting {cmd:?}"))?;
+    if !status.success() {
+        bail!("{cmd:?} failed: {status}");
+    }
+    Ok(())
+}
+
+fn cargo() -> Command {
+    Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+}
+
+/// Builds the FMU archive.
+fn fmu() -> Result<()> {
+    let root = root();
+    let target = root.join("target");
+    println!("xtask fmu: building the FtFusion shared library (release)");
+    run(cargo().args(["build", "--release", "-p", "ftfusion", "--lib"]))?;
+    let so = target.join("release/libftfusion.so");
+    // The line tables of the release profile are for developers: strip them from the FMU.
+    let stripped = target.join("fmu/FtFusion.so");
+    std::fs::create_dir_all(target.join("fmu"))?;
+    std::fs::copy(&so, &stripped).with_context(|| format!("copying {}", so.display()))?;
+    if Command::new("strip")
+        .arg("--strip-debug")
+        .arg(&stripped)
+        .status()
+        .map(|s| !s.success())
+        .unwrap_or(true)
+    {
+        println!(
+            "xtask fmu: `strip` unavailable or failed: the binary keeps its debug line tables"
+        );
+    }
+    let binary =
+        std::fs::read(&stripped).with_context(|| format!("reading {}", stripped.display()))?;
+    let map = default_map(&target.join("maps"))?;
+    let map_bytes = std::fs::read(&map).with_context(|| format!("reading {}", map.display()))?;
+
+    let out = target.join("fmu/FtFusion.fmu");
+    std::fs::create_dir_all(out.parent().unwrap_or(&target))?;
+    let partial = out.with_extension("fmu.partial");
+    let file = std::fs::File::create(&partial)
+        .with_context(|| format!("creating {}", partial.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let opts = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    let (xml, doc) = (model_description::xml(), documentation());
+    let entries: [(&str, &[u8]); 4] = [
+        ("modelDescription.xml", xml.as_bytes()),
+        ("binaries/linux64/FtFusion.so", &binary),
+        ("resources/peg_in_hole.ftmap", &map_bytes),
+        ("documentation/index.html", doc.as_bytes()),
+    ];
+    for (name, bytes) in entries {
+        zip.start_file(name, opts)
+            .with_context(|| format!("adding {name}"))?;
+        zip.write_all(bytes)
+            .with_context(|| format!("writing {name}"))?;
+    }
+    zip.finish().context("finishing the archive")?;
+    std::fs::rename(&partial, &out)?;
+    println!(
+        "xtask fmu: wrote {} (GUID {})",
+        out.display(),
+        model_description::guid()
+    );
+    Ok(())
+}
+
+/// The default task's map, computed with the CPU backend and cached in `cache` under the
+/// hash of the task file and its meshes.
+fn default_map(cache: &Path) -> Result<PathBuf> {
+    let task =
+        ftmap::Task::find(DEFAULT_TASK).with_context(|| format!("loading task {DEFAULT_TASK}"))?;
+    let mut h = Sha256::new();
+    for f in [&task.path, &task.part_a.mesh, &task.part_b.mesh] {
+        h.update(std::fs::read(f).with_context(|| format!("reading {}", f.display()))?);
+    }
+    h.update(env!("CARGO_PKG_VERSION"));
+    let hash: String = h
+        .finalize()
+        .iter()
+        .take(8)
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let path = cache.join(format!("{DEFAULT_TASK}-{hash}.ftmap"));
+    if path.is_file() && ftmap::format::load(&path).is_ok() {
+        println!("xtask fmu: map {} (cached)", path.display());
+        return Ok(path);
+    }
+    println!("xtask fmu: computing the {DEFAULT_TASK} map (CPU backend)");
+    let t0 = std::time::Instant::now();
+    let map =
+        ftmap::generate::generate(&task, &ftmap::cpu::CpuBackend, &Default::default(), &|_| {})
+            .with_context(|| format!("computing the {DEFAULT_TASK} map"))?;
+    ftmap::format::save(&map, &path).with_context(|| format!("saving {}", path.display()))?;
+    println!(
+        "xtask fmu: {} cells in {:.1} s -> {}",
+        map.grid().cells(),
+        t0.elapsed().as_secs_f64(),
+        path.display()
+    );
+    Ok(path)
+}
+
+/// Escapes text for HTML.
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// documentation/index.html: what the FMU does, its variables (from the table), usage and
+/// an example.
+fn documentation() -> String {
+    let mut rows = String::new();
+    for v in VARIABLES {
+        let start = match v.start {
+            Start::None => String::new(),
+            Start::Real(x) => format!("{x}"),
+            Start::Integer(x) => format!("{x}"),
+            Start::Boolean(x) => format!("{x}"),
+            Start::String(x) => x.to_owned(),
+        };
+        let range = match (v.min, v.max) {
+            (None, None) => String::new(),
+            (a, b) => format!(
+                "[{}, {}]",
+                a.map_or("-inf".into(), |x| format!("{x}")),
+                b.map_or("inf".into(), |x| format!("{x}"))
+            ),
+        };
+        rows.push_str(&format!(
+            "<tr><td><code>{}</code></td><td>{}</td><td>{:?}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            v.name,
+            v.vr,
+            v.causality,
+            v.ty,
+            esc(&start),
+            v.unit,
+            range,
+            esc(v.description)
+        ));
+    }
+    let params: Vec<&str> = VARIABLES
+        .iter()
+        .filter(|v| v.causality == Causality::Parameter)
+        .map(|v| v.name)
+        .collect();
+    format!(
+        r#"<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>FtFusion.fmu</title>
+<style>body{{font-family:sans-serif;max-width:70em;margin:auto}}td,th{{border:1px solid #ccc;padding:2px 6px}}table{{border-collapse:collapse}}</style>
+</head><body>
+<h1>FtFusion.fmu</h1>
+<p>An FMI 2.0 Co-Simulation FMU (GUID <code>{guid}</code>) holding a condensation particle filter that
+estimates the unknown relative pose between a gripped part and its mating part from contact wrenches and a
+Force Torque Map (FT-Map), after "Multi Sensor Fusion in Robot Assembly Using Particle Filters", section IV.</p>
+<h2>How it works</h2>
+<ul>
+<li>At <code>fmi2ExitInitializationMode</code> the FMU loads the FT-Map named by <code>map</code> (a file in the
+FMU's <code>resources/</code> folder or an absolute path; default: <code>peg_in_hole.ftmap</code>, computed from the
+CAD meshes of the peg-in-hole task) and spreads <code>particles</code> uniformly over the map's uncertain DOFs.</li>
+<li>Each time the Boolean input <code>contact</code> rises, the <code>fmi2DoStep</code> that sees it takes one
+measurement: the wrench inputs (sensor frame, torque about the sensor origin) and the TCP pose (task frame
+relative to the nominal goal). It runs <code>iterations</code> filter iterations (weight by Eq. 3 with
+<code>sigma_force</code>, <code>sigma_torque</code>, <code>sigma_depth</code>; normalise; systematic resampling
+when the effective sample size falls to N/2; jitter of <code>jitter</code> grid intervals).</li>
+<li>A particle's map coordinate for an <code>object.*</code> DOF is its object pose minus the TCP pose
+(<code>object.z</code> excepted: <code>tcp.z</code> at the contact is the measured contact height, compared with
+the map's depth channel when <code>sigma_depth</code> &gt; 0); <code>grip.*</code> DOFs do not move with the TCP.
+So commanding <code>tcp := object</code> aligns the parts.</li>
+<li>Outputs: the estimate (weighted mode of the dominant particle cluster), its spread (<code>*_std</code>),
+<code>confidence</code> (weight within <code>confidence_radius</code>), <code>converged</code>
+(confidence &gt; <code>threshold</code>), <code>ess</code>, <code>measurements</code>, <code>clusters</code>.
+DOFs the map does not have stay 0.</li>
+<li>NaN or infinite inputs: the measurement is skipped with fmi2Warning. Parameters out of range, a missing or
+corrupt map: fmi2Error at initialization naming the problem. Calls in the wrong state: fmi2Error, the
+instance stays usable. FMU states can be saved, restored and serialized; a restored run replays bit for bit.</li>
+</ul>
+<h2>Parameters</h2><p>{params}</p>
+<h2>Variables</h2>
+<table><tr><th>name</th><th>value reference</th><th>causality</th><th>type</th><th>start</th><th>unit</th><th>range</th><th>description</th></tr>
+{rows}</table>
+<h2>Example (Python, FMPy)</h2>
+<pre>
+import numpy as np
+from fmpy import simulate_fmu
+
+# one contact at t = 1 s: the peg rests on the rim, the torque says where the hole is
+rows = [(0.0, 0, 0, 0, 0, 0, 0, 0.0, False),
+        (1.0, 0, 0, 50, 0.12, -0.08, 0, 0.01, True),
+        (2.0, 0, 0, 50, 0.12, -0.08, 0, 0.01, False)]
+dtype = [('time', float), ('wrench.fx', float), ('wrench.fy', float), ('wrench.fz', float),
+         ('wrench.tx', float), ('wrench.ty', float), ('wrench.tz', float), ('tcp.z', float), ('contact', bool)]
+result = simulate_fmu('FtFusion.fmu', stop_time=3.0, step_size=0.1, input=np.array(rows, dtype=dtype),
+                      start_values={{'particles': 4000, 'seed': 1}},
+                      output=['object.x', 'object.y', 'confidence', 'converged'])
+print(result[-1])
+</pre>
+<p>Loop of Algorithm 1 in a system simulation: move into contact, set the wrench and the TCP pose, raise
+<code>contact</code>, step, read <code>object.x</code>/<code>object.y</code>, command the TCP there, lower
+<code>contact</code>, repeat until <code>converged</code>.</p>
+</body></html>
+"#,
+        guid = model_description::guid(),
+        params = params
+            .iter()
+            .map(|p| format!("<code>{p}</code>"))
+            .collect::<Vec<_>>()
+            .join(", "),
+    )
+}
+
+/// The filter benchmark: Rust (release) and NumPy on the same sizes, and the ratio.
+fn bench(args: &[String]) -> Result<()> {
+    run(cargo().args([
+        "build",
+        "--release",
+        "-p",
+        "ftfusion",
+        "--bin",
+        "ftfusion-bench",
+    ]))?;
+    let out = Command::new(root().join("target/release/ftfusion-bench"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .context("running ftfusion-bench")?;
+    print!("{}", String::from_utf8_lossy(&out.stdout));
+    if !out.status.success() {
+        bail!(
+            "ftfusion-bench failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let rust = figure(
+        &String::from_utf8_lossy(&out.stdout),
+        "multilinear_updates_per_s",
+    )?;
+    let py = Command::new("python3")
+        .arg(root().join("tests/bench_numpy.py"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .context("running python3 tests/bench_numpy.py")?;
+    print!("{}", String::from_utf8_lossy(&py.stdout));
+    if !py.status.success() {
+        bail!(
+            "tests/bench_numpy.py failed: {}",
+            String::from_utf8_lossy(&py.stderr)
+        );
+    }
+    let numpy = figure(&String::from_utf8_lossy(&py.stdout), "numpy_updates_per_s")?;
+    println!(
+        "speedup_rust_over_numpy = {:.1}x (goal >= 10x)",
+        rust / numpy
+    );
+    Ok(())
+}
+
+/// The number after `key =` in a benchmark's output.
+fn figure(text: &str, key: &str) -> Result<f64> {
+    text.lines()
+        .find_map(|l| {
+            l.strip_prefix(key)?
+                .trim_start()
+                .strip_prefix('=')?
+                .split_whitespace()
+                .next()?
+                .parse()
+                .ok()
+        })
+        .with_context(|| format!("no `{key} = ` line in the benchmark output"))
+}

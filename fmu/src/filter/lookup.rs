@@ -254,19 +254,23 @@ impl Lookup {
                 base += lo * stride[k];
                 frac[k] = t - lo as f32;
             }
-            let mut acc = [0.0f32; LANES];
-            for corner in 0..1usize << D {
-                let mut w = 1.0f32;
-                let mut idx = base;
-                for k in 0..D {
-                    if corner >> k & 1 == 1 {
-                        w *= frac[k];
-                        idx += up[k];
-                    } else {
-                        w *= 1.0 - frac[k];
-                    }
+            // Corner weights and indices by tensor expansion: 2 + 4 + .. + 2^D products.
+            let mut wts = [0.0f32; 1 << 6];
+            let mut idx = [0usize; 1 << 6];
+            wts[0] = 1.0;
+            idx[0] = base;
+            let mut len = 1;
+            for k in 0..D {
+                for j in 0..len {
+                    wts[j + len] = wts[j] * frac[k];
+                    idx[j + len] = idx[j] + up[k];
+                    wts[j] *= 1.0 - frac[k];
                 }
-                let cell = &self.cells[idx];
+                len *= 2;
+            }
+            let mut acc = [0.0f32; LANES];
+            for (w, &c) in wts.iter().zip(&idx).take(1 << D) {
+                let cell = &self.cells[c];
                 for l in 0..LANES {
                     acc[l] += w * cell[l];
                 }

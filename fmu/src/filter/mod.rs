@@ -111,6 +111,7 @@ pub struct Filter {
 #[derive(Debug, Clone, Default)]
 struct Scratch {
     ll: Vec<f32>,
+    w: Vec<f32>,
     pos: Vec<f32>,
     pick: Vec<u32>,
 }
@@ -135,6 +136,7 @@ impl Filter {
             estimate: Estimate::default(),
             scratch: Scratch {
                 ll: vec![0.0; n],
+                w: vec![0.0; n],
                 pos: vec![0.0; n * d],
                 pick: vec![0; n],
             },
@@ -238,8 +240,8 @@ impl Filter {
         let shift = self.lookup.tcp_shift(&m.tcp);
         let mut report = Report::default();
         for _ in 0..self.cfg.iterations {
-            self.weigh(&shift, &meas, &inv_var, &mut report);
-            if self.ess() <= self.cfg.particles as f64 / 2.0 {
+            let ess = self.weigh(&shift, &meas, &inv_var, &mut report);
+            if ess <= self.cfg.particles as f64 / 2.0 {
                 self.resample();
                 report.resampled += 1;
             }
@@ -251,14 +253,15 @@ impl Filter {
     }
 
     /// Multiplies the weights by the likelihood and normalises (log-sum-exp); re-spreads a
-    /// share of the particles when every likelihood underflows.
+    /// share of the particles when every likelihood underflows. Returns the ESS and leaves
+    /// the linear weights in `scratch.w`.
     fn weigh(
         &mut self,
         shift: &[f32],
         meas: &[f32; LANES],
         inv_var: &[f32; LANES],
         report: &mut Report,
-    ) {
+    ) -> f64 {
         let interp = self.cfg.interpolation;
         let mut ll = std::mem::take(&mut self.scratch.ll);
         self.lookup
@@ -281,21 +284,15 @@ impl Filter {
         for (w, l) in self.lw.iter_mut().zip(&ll) {
             *w += l;
         }
-        normalise(&mut self.lw);
         self.scratch.ll = ll;
-    }
-
-    /// Effective sample size 1 / sum w^2.
-    pub fn ess(&self) -> f64 {
-        let s: f64 = self.lw.iter().map(|&l| (2.0 * f64::from(l)).exp()).sum();
-        if s > 0.0 { 1.0 / s } else { 0.0 }
+        normalise(&mut self.lw, &mut self.scratch.w)
     }
 
     /// Systematic resampling; weights become uniform.
     fn resample(&mut self) {
         let n = self.cfg.particles;
         let u0: f64 = unit::<f64>(&mut self.rng);
-        resample::systematic(&self.lw, u0, &mut self.scratch.pick);
+        resample::systematic(&self.scratch.w, u0, &mut self.scratch.pick);
         let d = self.lookup.ndim();
         for k in 0..d {
             let (src, dst) = (
@@ -338,14 +335,24 @@ where
     rand_distr::StandardUniform.sample(rng)
 }
 
-/// Shifts log weights so that their exponentials sum to 1 (log-sum-exp).
-fn normalise(lw: &mut [f32]) {
+/// Shifts log weights so that their exponentials sum to 1 (log-sum-exp), writes the
+/// linear weights into `w` and returns the effective sample size (sum w)^2 / sum w^2.
+fn normalise(lw: &mut [f32], w: &mut [f32]) -> f64 {
     let max = lw.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-    let sum: f64 = lw.iter().map(|&l| f64::from(l - max).exp()).sum();
-    let shift = max + sum.ln() as f32;
-    for l in lw.iter_mut() {
-        *l -= shift;
+    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+    for (o, &l) in w.iter_mut().zip(lw.iter()) {
+        let x = (l - max).exp();
+        *o = x;
+        sum += f64::from(x);
+        sum2 += f64::from(x) * f64::from(x);
     }
+    let shift = max + sum.ln() as f32;
+    let inv = (1.0 / sum) as f32;
+    for (l, o) in lw.iter_mut().zip(w.iter_mut()) {
+        *l -= shift;
+        *o *= inv;
+    }
+    sum * sum / sum2
 }
 
 #[cfg(test)]
