@@ -1,0 +1,191 @@
+//! Trial campaigns: random true offsets (or a grid of them), one trial each, with a
+//! progress bar; the table of trials (CSV), a summary (JSON and a readable table).
+
+use std::path::Path;
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use serde::Serialize;
+
+use crate::error::{HarnessError, Result};
+use crate::fmu_driver::Fmu;
+use crate::sim::Sim;
+use crate::trial::{Strategy, TrialConfig, TrialResult, run_trial};
+
+/// True offsets uniform in the square ±`size` (m), from `seed`.
+pub fn random_offsets(n: usize, size: f64, seed: u64) -> Vec<[f64; 2]> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    (0..n).map(|_| [rng.random_range(-size..=size), rng.random_range(-size..=size)]).collect()
+}
+
+/// True offsets on a `k` x `k` grid over the square ±`size` (m).
+pub fn grid_offsets(k: usize, size: f64) -> Vec<[f64; 2]> {
+    let at = |i: usize| if k < 2 { 0.0 } else { -size + 2.0 * size * i as f64 / (k - 1) as f64 };
+    (0..k).flat_map(|j| (0..k).map(move |i| [at(i), at(j)])).collect()
+}
+
+/// Runs one trial per offset; trial i uses seed `seed + i`.
+///
+/// # Errors
+/// When the FMU fails.
+pub fn run_campaign(sim: &mut Sim, fmu: Option<&Fmu>, cfg: &TrialConfig, offsets: &[[f64; 2]], seed: u64) -> Result<Vec<TrialResult>> {
+    let bar = ProgressBar::new(offsets.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} trials {msg} ({elapsed}, eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(format!("{:?}", cfg.strategy).to_lowercase());
+    let mut results = Vec::with_capacity(offsets.len());
+    let mut ok = 0;
+    for (i, off) in offsets.iter().enumerate() {
+        let r = run_trial(sim, fmu, cfg, *off, seed + i as u64)?;
+        ok += usize::from(r.success);
+        results.push(r);
+        bar.set_message(format!("{ok} ok"));
+        bar.inc(1);
+    }
+    bar.finish();
+    Ok(results)
+}
+
+/// Statistics of the contact counts.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ContactStats {
+    /// Mean.
+    pub mean: f64,
+    /// Median.
+    pub median: f64,
+    /// 95th percentile (nearest rank).
+    pub p95: f64,
+    /// Maximum.
+    pub max: f64,
+}
+
+/// The summary of a campaign (`summary.json`).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Summary {
+    /// Task name.
+    pub task: String,
+    /// Strategy.
+    pub strategy: Strategy,
+    /// Trials run.
+    pub trials: usize,
+    /// Fraction of trials that reached the goal depth.
+    pub success_rate: f64,
+    /// Contact motions per trial (all trials).
+    pub contacts: ContactStats,
+    /// Mean distance of the last approach point from the true offset (m).
+    pub final_error_mean: f64,
+    /// Largest such distance (m).
+    pub final_error_max: f64,
+    /// Trials per wall-clock second.
+    pub trials_per_second: f64,
+    /// Simulated time over wall-clock time spent in MuJoCo.
+    pub realtime_factor: f64,
+    /// Simulated time over the whole wall-clock time of the trials (FMU included).
+    pub realtime_factor_overall: f64,
+    /// Whether the sensor noise was on.
+    pub sensor_noise: bool,
+}
+
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[rank - 1]
+}
+
+/// Summarises trial results.
+pub fn summarize(task: &str, strategy: Strategy, sensor_noise: bool, results: &[TrialResult], wall: f64) -> Summary {
+    let n = results.len().max(1) as f64;
+    let mut c: Vec<f64> = results.iter().map(|r| r.contacts as f64).collect();
+    c.sort_by(f64::total_cmp);
+    let sim: f64 = results.iter().map(|r| r.sim_time).sum();
+    let sim_wall: f64 = results.iter().map(|r| r.sim_wall).sum();
+    let trial_wall: f64 = results.iter().map(|r| r.wall).sum();
+    Summary {
+        task: task.to_owned(),
+        strategy,
+        trials: results.len(),
+        success_rate: results.iter().filter(|r| r.success).count() as f64 / n,
+        contacts: ContactStats {
+            mean: c.iter().sum::<f64>() / n,
+            median: percentile(&c, 0.5),
+            p95: percentile(&c, 0.95),
+            max: c.last().copied().unwrap_or(f64::NAN),
+        },
+        final_error_mean: results.iter().map(|r| r.final_error).sum::<f64>() / n,
+        final_error_max: results.iter().map(|r| r.final_error).fold(0.0, f64::max),
+        trials_per_second: results.len() as f64 / wall.max(1e-9),
+        realtime_factor: sim / sim_wall.max(1e-9),
+        realtime_factor_overall: sim / trial_wall.max(1e-9),
+        sensor_noise,
+    }
+}
+
+impl Summary {
+    /// A readable table of the summary.
+    pub fn table(&self) -> String {
+        let mm = |m: f64| format!("{:.3} mm", m * 1e3);
+        let rows = [
+            ("task", self.task.clone()),
+            ("strategy", format!("{:?}", self.strategy).to_lowercase()),
+            ("sensor noise", if self.sensor_noise { "on" } else { "off" }.to_owned()),
+            ("trials", self.trials.to_string()),
+            ("success rate", format!("{:.1} %", 100.0 * self.success_rate)),
+            (
+                "contacts mean / median / p95 / max",
+                format!("{:.2} / {} / {} / {}", self.contacts.mean, self.contacts.median, self.contacts.p95, self.contacts.max),
+            ),
+            ("final error mean / max", format!("{} / {}", mm(self.final_error_mean), mm(self.final_error_max))),
+            ("trials per second", format!("{:.2}", self.trials_per_second)),
+            ("real-time factor (MuJoCo / whole loop)", format!("{:.1} x / {:.1} x", self.realtime_factor, self.realtime_factor_overall)),
+        ];
+        let w = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
+        rows.iter().map(|(k, v)| format!("  {k:<w$}  {v}\n")).collect()
+    }
+}
+
+/// Writes `trials.csv`: one row per trial.
+///
+/// # Errors
+/// When the file cannot be written.
+pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
+    let io = |e: csv::Error| HarnessError::io(path, std::io::Error::other(e));
+    let mut w = csv::Writer::from_path(path).map_err(io)?;
+    w.write_record(["trial", "offset_x_m", "offset_y_m", "contacts", "success", "final_error_m", "wall_s", "sim_time_s"]).map_err(io)?;
+    for (i, r) in results.iter().enumerate() {
+        w.write_record([
+            i.to_string(),
+            format!("{:.9}", r.offset[0]),
+            format!("{:.9}", r.offset[1]),
+            r.contacts.to_string(),
+            r.success.to_string(),
+            format!("{:.9}", r.final_error),
+            format!("{:.4}", r.wall),
+            format!("{:.4}", r.sim_time),
+        ])
+        .map_err(io)?;
+    }
+    w.flush().map_err(|e| HarnessError::io(path, e))
+}
+
+/// Writes `summary.json`.
+///
+/// # Errors
+/// When the file cannot be written.
+pub fn write_summary(path: &Path, s: &Summary) -> Result<()> {
+    let text = serde_json::to_string_pretty(s).map_err(|e| HarnessError::io(path, std::io::Error::other(e)))?;
+    std::fs::write(path, text + "\n").map_err(|e| HarnessError::io(path, e))
+}
+
+/// Times a closure (s).
+pub fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let t = Instant::now();
+    let out = f();
+    (out, t.elapsed().as_secs_f64())
+}

@@ -1,0 +1,231 @@
+//! `FtFusion.fmu` driven through the `fmi` crate's FMI 2.0 Co-Simulation importer, the way
+//! any system simulator would: variables looked up by name in its modelDescription.xml,
+//! one instance per trial, a new measurement on each rising edge of `contact`.
+
+use std::ffi::CString;
+use std::path::{Path, PathBuf};
+
+use fmi::fmi2::import::Fmi2Import;
+use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
+use fmi::traits::FmiImport;
+
+use crate::error::{HarnessError, Result};
+
+/// Communication step of the FMU (s).
+const STEP: f64 = 0.001;
+
+/// The FMU as `cargo xtask fmu` builds it, in this source tree.
+pub fn default_fmu_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/fmu/FtFusion.fmu")
+}
+
+/// Estimator settings handed to the FMU's parameters (`None`: the FMU's default).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Settings {
+    /// `map`: an absolute path of an FT-Map file.
+    pub map: Option<PathBuf>,
+    /// `seed`.
+    pub seed: Option<i32>,
+    /// `particles`.
+    pub particles: Option<i32>,
+    /// `iterations` per measurement.
+    pub iterations: Option<i32>,
+    /// `sigma_torque` (N m).
+    pub sigma_torque: Option<f64>,
+    /// `sigma_force` (N).
+    pub sigma_force: Option<f64>,
+}
+
+/// The FMU's estimate after a measurement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// `object.x`, `object.y` (m).
+    pub object: [f64; 2],
+    /// `object.x_std`, `object.y_std` (m).
+    pub std: [f64; 2],
+    /// `confidence` (0..1).
+    pub confidence: f64,
+    /// `converged`.
+    pub converged: bool,
+    /// `ess`.
+    pub ess: f64,
+    /// `measurements`.
+    pub measurements: i32,
+    /// `clusters`.
+    pub clusters: i32,
+}
+
+/// Value references of the variables the harness uses.
+#[derive(Debug, Clone)]
+struct Refs {
+    wrench: [u32; 6],
+    tcp: [u32; 6],
+    contact: u32,
+    object: [u32; 2],
+    std: [u32; 2],
+    reals: [u32; 2],
+    ints: [u32; 2],
+    converged: u32,
+    map: u32,
+    seed: u32,
+    particles: u32,
+    iterations: u32,
+    sigma_torque: u32,
+    sigma_force: u32,
+}
+
+/// A loaded (unpacked) FMU, from which trials instantiate estimators.
+pub struct Fmu {
+    import: Fmi2Import,
+    refs: Refs,
+    path: PathBuf,
+}
+
+fn fmi_err(what: impl Into<String>) -> impl FnOnce(fmi::fmi2::Fmi2Error) -> HarnessError {
+    let what = what.into();
+    move |e| HarnessError::Fmu { what, reason: e.to_string() }
+}
+
+impl Fmu {
+    /// Loads the FMU at `path`.
+    ///
+    /// # Errors
+    /// [`HarnessError::FmuMissing`] (naming `cargo xtask fmu`) when there is no file;
+    /// [`HarnessError::Fmu`] when it cannot be unpacked or lacks a variable.
+    pub fn load(path: &Path) -> Result<Self> {
+        if !path.is_file() {
+            return Err(HarnessError::FmuMissing { path: path.to_owned() });
+        }
+        let import = fmi::import::from_path::<Fmi2Import>(path)
+            .map_err(|e| HarnessError::Fmu { what: format!("import {}", path.display()), reason: e.to_string() })?;
+        let md = import.model_description();
+        let vr = |name: &str| {
+            md.model_variable_by_name(name)
+                .map(|v| v.value_reference)
+                .map_err(|e| HarnessError::Fmu { what: format!("variable `{name}`"), reason: e.to_string() })
+        };
+        let each = |prefix: &str, names: [&str; 6]| -> Result<[u32; 6]> {
+            let mut out = [0; 6];
+            for (o, n) in out.iter_mut().zip(names) {
+                *o = vr(&format!("{prefix}.{n}"))?;
+            }
+            Ok(out)
+        };
+        let refs = Refs {
+            wrench: each("wrench", ["fx", "fy", "fz", "tx", "ty", "tz"])?,
+            tcp: each("tcp", ["x", "y", "z", "rx", "ry", "rz"])?,
+            contact: vr("contact")?,
+            object: [vr("object.x")?, vr("object.y")?],
+            std: [vr("object.x_std")?, vr("object.y_std")?],
+            reals: [vr("confidence")?, vr("ess")?],
+            ints: [vr("measurements")?, vr("clusters")?],
+            converged: vr("converged")?,
+            map: vr("map")?,
+            seed: vr("seed")?,
+            particles: vr("particles")?,
+            iterations: vr("iterations")?,
+            sigma_torque: vr("sigma_torque")?,
+            sigma_force: vr("sigma_force")?,
+        };
+        Ok(Self { import, refs, path: path.to_owned() })
+    }
+
+    /// The FMU file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// A new, initialised estimator instance with `settings`.
+    ///
+    /// # Errors
+    /// When the FMU refuses to instantiate, a parameter, or initialisation.
+    pub fn estimator(&self, settings: &Settings) -> Result<Estimator> {
+        let mut inst = self
+            .import
+            .instantiate_cs("harness", false, false)
+            .map_err(|e| HarnessError::Fmu { what: "fmi2Instantiate".into(), reason: e.to_string() })?;
+        let r = &self.refs;
+        if let Some(map) = &settings.map {
+            let text = map.to_string_lossy().into_owned();
+            let c = CString::new(text).map_err(|e| HarnessError::Invalid { what: "map", reason: e.to_string() })?;
+            inst.set_string(&[r.map], &[c]).map_err(fmi_err("set map"))?;
+        }
+        for (vr, v, name) in [(r.seed, settings.seed, "seed"), (r.particles, settings.particles, "particles"), (r.iterations, settings.iterations, "iterations")] {
+            if let Some(v) = v {
+                inst.set_integer(&[vr], &[v]).map_err(fmi_err(format!("set {name}")))?;
+            }
+        }
+        for (vr, v, name) in [(r.sigma_torque, settings.sigma_torque, "sigma_torque"), (r.sigma_force, settings.sigma_force, "sigma_force")] {
+            if let Some(v) = v {
+                inst.set_real(&[vr], &[v]).map_err(fmi_err(format!("set {name}")))?;
+            }
+        }
+        inst.setup_experiment(None, 0.0, None).map_err(fmi_err("fmi2SetupExperiment"))?;
+        Common::enter_initialization_mode(&mut inst).map_err(fmi_err("fmi2EnterInitializationMode"))?;
+        Common::exit_initialization_mode(&mut inst).map_err(fmi_err("fmi2ExitInitializationMode"))?;
+        Ok(Estimator { inst, refs: r.clone(), time: 0.0 })
+    }
+}
+
+/// One FMU instance estimating one trial's object pose.
+pub struct Estimator {
+    inst: InstanceCS,
+    refs: Refs,
+    time: f64,
+}
+
+impl Estimator {
+    fn step(&mut self) -> Result<()> {
+        self.inst.do_step(self.time, STEP, true).map_err(fmi_err("fmi2DoStep"))?;
+        self.time += STEP;
+        Ok(())
+    }
+
+    /// Hands one settled contact to the FMU (wrench in the map's convention, TCP position
+    /// relative to the nominal goal) and returns its new estimate.
+    ///
+    /// # Errors
+    /// When the FMU refuses an input or the step.
+    pub fn measure(&mut self, wrench: [f64; 6], tcp: [f64; 3]) -> Result<Estimate> {
+        let r = &self.refs;
+        self.inst.set_real(&r.wrench, &wrench).map_err(fmi_err("set wrench"))?;
+        self.inst.set_real(&r.tcp, &[tcp[0], tcp[1], tcp[2], 0.0, 0.0, 0.0]).map_err(fmi_err("set tcp"))?;
+        self.inst.set_boolean(&[r.contact], &[1]).map_err(fmi_err("set contact"))?;
+        self.step()?;
+        let estimate = self.estimate()?;
+        let contact = self.refs.contact;
+        self.inst.set_boolean(&[contact], &[0]).map_err(fmi_err("set contact"))?;
+        self.step()?;
+        Ok(estimate)
+    }
+
+    /// The FMU's current outputs.
+    ///
+    /// # Errors
+    /// When the FMU refuses a get call.
+    pub fn estimate(&mut self) -> Result<Estimate> {
+        let r = &self.refs;
+        let (mut object, mut std, mut reals, mut ints, mut conv) = ([0.0; 2], [0.0; 2], [0.0; 2], [0; 2], [0]);
+        self.inst.get_real(&r.object, &mut object).map_err(fmi_err("get object"))?;
+        self.inst.get_real(&r.std, &mut std).map_err(fmi_err("get object std"))?;
+        self.inst.get_real(&r.reals, &mut reals).map_err(fmi_err("get confidence, ess"))?;
+        self.inst.get_integer(&r.ints, &mut ints).map_err(fmi_err("get measurements, clusters"))?;
+        self.inst.get_boolean(&[r.converged], &mut conv).map_err(fmi_err("get converged"))?;
+        Ok(Estimate {
+            object,
+            std,
+            confidence: reals[0],
+            converged: conv[0] != 0,
+            ess: reals[1],
+            measurements: ints[0],
+            clusters: ints[1],
+        })
+    }
+}
+
+impl Drop for Estimator {
+    fn drop(&mut self) {
+        // The instance is freed by its own Drop; terminate first as FMI 2.0 asks.
+        let _ = Common::terminate(&mut self.inst);
+    }
+}

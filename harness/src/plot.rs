@@ -1,0 +1,143 @@
+//! Plots a person looks at (PNG): the estimate after the first contacts of a trial (the
+//! paper's Fig. 8; the FMU exposes no particles, so each panel shows the estimate and its
+//! 1- and 2-sigma ellipses), contacts per true offset of a sweep (Fig. 10), and the
+//! agreement of two maps.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use crate::error::{HarnessError, Result};
+use crate::trial::TrialResult;
+
+type Draw = std::result::Result<(), Box<dyn std::error::Error>>;
+
+fn wrap(path: &Path, r: Draw) -> Result<()> {
+    r.map_err(|e| HarnessError::Plot { path: path.to_owned(), reason: e.to_string() })
+}
+
+fn ensure_dir(path: &Path) -> Result<()> {
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(d) => std::fs::create_dir_all(d).map_err(|e| HarnessError::io(d, e)),
+        None => Ok(()),
+    }
+}
+
+/// Estimate and spread after contacts 1, 2, 3 of `trial` over Omega (±`size` m).
+///
+/// # Errors
+/// When the image cannot be written.
+pub fn estimates(path: &Path, trial: &TrialResult, size: f64) -> Result<()> {
+    ensure_dir(path)?;
+    wrap(path, draw_estimates(path, trial, size))
+}
+
+fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
+    let root = BitMapBackend::new(path, (1500, 540)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let panels = root.split_evenly((1, 3));
+    let s = size * 1e3;
+    let truth = (trial.offset[0] * 1e3, trial.offset[1] * 1e3);
+    for (k, area) in panels.iter().enumerate() {
+        let step = trial.steps.get(k);
+        let caption = match step {
+            Some(st) if st.estimate.is_some() => format!("after contact {}", k + 1),
+            Some(_) => format!("contact {}: inserted", k + 1),
+            None => format!("contact {}: none (done)", k + 1),
+        };
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(-s..s, -s..s)?;
+        chart.configure_mesh().x_desc("object.x [mm]").y_desc("object.y [mm]").draw()?;
+        chart.draw_series(std::iter::once(Cross::new(truth, 9, RED.stroke_width(3))))?.label("true offset").legend(|(x, y)| Cross::new((x, y), 5, RED.stroke_width(2)));
+        let tcps: Vec<(f64, f64)> = trial.steps.iter().take(k + 1).map(|st| (st.tcp[0] * 1e3, st.tcp[1] * 1e3)).collect();
+        chart
+            .draw_series(tcps.iter().map(|p| TriangleMarker::new(*p, 7, BLACK.filled())))?
+            .label("contact points")
+            .legend(|(x, y)| TriangleMarker::new((x, y), 5, BLACK.filled()));
+        if let Some(e) = step.and_then(|st| st.estimate) {
+            let (cx, cy) = (e.object[0] * 1e3, e.object[1] * 1e3);
+            for (n, colour) in [(1.0, BLUE.mix(1.0)), (2.0, BLUE.mix(0.4))] {
+                let ring: Vec<(f64, f64)> = (0..=72)
+                    .map(|i| {
+                        let t = std::f64::consts::TAU * i as f64 / 72.0;
+                        (cx + n * e.std[0] * 1e3 * t.cos(), cy + n * e.std[1] * 1e3 * t.sin())
+                    })
+                    .collect();
+                chart.draw_series(LineSeries::new(ring, colour.stroke_width(2)))?;
+            }
+            chart
+                .draw_series(std::iter::once(Circle::new((cx, cy), 5, BLUE.filled())))?
+                .label(format!("estimate, 1/2 sigma (conf {:.2})", e.confidence))
+                .legend(|(x, y)| Circle::new((x, y), 4, BLUE.filled()));
+        }
+        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+/// Contacts needed per true offset of a sweep (the paper's Fig. 10); failures in black.
+///
+/// # Errors
+/// When the image cannot be written.
+pub fn sweep(path: &Path, results: &[TrialResult], size: f64, cell: f64) -> Result<()> {
+    ensure_dir(path)?;
+    wrap(path, draw_sweep(path, results, size, cell))
+}
+
+fn draw_sweep(path: &Path, results: &[TrialResult], size: f64, cell: f64) -> Draw {
+    let root = BitMapBackend::new(path, (820, 760)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (s, h) = ((size + cell / 2.0) * 1e3, cell * 1e3 / 2.0);
+    let max = results.iter().filter(|r| r.success).map(|r| r.contacts).max().unwrap_or(1).max(2) as f64;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("contact motions per true offset", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(55)
+        .build_cartesian_2d(-s..s, -s..s)?;
+    chart.configure_mesh().x_desc("object.x [mm]").y_desc("object.y [mm]").disable_mesh().draw()?;
+    for r in results {
+        let (x, y) = (r.offset[0] * 1e3, r.offset[1] * 1e3);
+        let colour = if r.success { ViridisRGB::get_color((r.contacts as f64 - 1.0) / (max - 1.0)) } else { BLACK };
+        chart.draw_series(std::iter::once(Rectangle::new([(x - h, y - h), (x + h, y + h)], colour.filled())))?;
+        let label = if r.success { r.contacts.to_string() } else { "x".into() };
+        let text_colour = if r.success && (r.contacts as f64) > 0.6 * max { BLACK } else { WHITE };
+        chart.draw_series(std::iter::once(Text::new(label, (x - h * 0.3, y + h * 0.3), ("sans-serif", 14).into_font().color(&text_colour))))?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+/// Scatter of two maps' values of the channels `names`, one panel each, with y = x.
+///
+/// # Errors
+/// When the image cannot be written.
+pub fn agreement(path: &Path, names: &[&str], pairs: &[Vec<(f64, f64)>], labels: [&str; 2]) -> Result<()> {
+    ensure_dir(path)?;
+    wrap(path, draw_agreement(path, names, pairs, labels))
+}
+
+fn draw_agreement(path: &Path, names: &[&str], pairs: &[Vec<(f64, f64)>], labels: [&str; 2]) -> Draw {
+    let root = BitMapBackend::new(path, (520 * names.len().max(1) as u32, 520)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let panels = root.split_evenly((1, names.len().max(1)));
+    for ((area, name), pts) in panels.iter().zip(names).zip(pairs) {
+        let m = pts.iter().flat_map(|p| [p.0.abs(), p.1.abs()]).fold(1e-9, f64::max) * 1.05;
+        let mut chart = ChartBuilder::on(area)
+            .caption(*name, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(-m..m, -m..m)?;
+        chart.configure_mesh().x_desc(labels[0]).y_desc(labels[1]).draw()?;
+        chart.draw_series(LineSeries::new([(-m, -m), (m, m)], BLACK.mix(0.5)))?;
+        chart.draw_series(pts.iter().map(|p| Circle::new(*p, 2, BLUE.mix(0.5).filled())))?;
+    }
+    root.present()?;
+    Ok(())
+}

@@ -1,0 +1,72 @@
+//! Measured FT-Maps (the paper's scanned maps): one contact motion in MuJoCo per cell of
+//! Omega, written in the same file format as computed maps (model `Measured`).
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use ftmap::mesh::Mesh;
+use ftmap::{FtMap, Grid, GridAxis, MapMeta, NCH, SourceMesh, Task, WrenchModel};
+
+use crate::error::{HarnessError, Result};
+use crate::sensor::map_wrench;
+use crate::sim::Sim;
+
+/// Scans Omega's object translation at `step` over ±`size` (m): for each cell the object is
+/// placed at the cell's offset and one contact motion is made at the nominal goal.
+///
+/// # Errors
+/// When the task's Omega has other DOFs than object.x and object.y, or the grid is invalid.
+pub fn scan(sim: &mut Sim, task: &Task, step: f64, size: f64) -> Result<FtMap> {
+    let dofs = task.dofs()?;
+    let names: Vec<String> = dofs.iter().map(|d| d.to_string()).collect();
+    if names != ["object.x", "object.y"] {
+        return Err(HarnessError::Invalid {
+            what: "scan",
+            reason: format!("scans object.x, object.y only; task {} has {}", task.name, names.join(", ")),
+        });
+    }
+    let axes = dofs.iter().map(|d| GridAxis::symmetric(*d, size, step)).collect::<ftmap::Result<Vec<_>>>()?;
+    let grid = Grid::new(axes)?;
+    let mut map = FtMap::zeros(grid.clone(), meta(task)?);
+    let bar = ProgressBar::new(grid.cells() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("scan [{bar:30}] {pos}/{len} contacts ({elapsed}, eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    for cell in 0..grid.cells() {
+        let c = grid.coords(cell);
+        sim.set_object([c[0], c[1]]);
+        let contact = sim.contact_motion([0.0, 0.0]);
+        let w = map_wrench(contact.raw);
+        let out = map.cell_mut(cell);
+        for k in 0..6 {
+            out[k] = w[k] as f32;
+        }
+        out[NCH - 1] = contact.tcp[2] as f32;
+        bar.inc(1);
+    }
+    bar.finish();
+    Ok(map)
+}
+
+fn meta(task: &Task) -> Result<MapMeta> {
+    let source = |role: &str, path: &std::path::Path| -> Result<SourceMesh> {
+        Ok(SourceMesh {
+            role: role.into(),
+            file: path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
+            sha256: Mesh::load(path)?.sha256,
+        })
+    };
+    Ok(MapMeta {
+        task: task.name.clone(),
+        model: WrenchModel::Measured,
+        approach: task.contact.approach,
+        force: task.contact.force,
+        friction: task.contact.friction,
+        sensor_origin: task.contact.sensor_origin,
+        pixel: 0.0,
+        sources: vec![source("A", &task.part_a.mesh)?, source("B", &task.part_b.mesh)?],
+        generator: format!("harness {} scan (MuJoCo {})", env!("CARGO_PKG_VERSION"), mujoco_rs::mujoco_version()),
+    })
+}
+

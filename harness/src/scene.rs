@@ -1,0 +1,442 @@
+//! MuJoCo scenes generated from a task's `task.toml` (`[contact]` and `[geometry]`): one
+//! source of truth for the map, the FMU and the simulated work cell.
+//!
+//! World frame = the nominal goal frame. Part B (fixed) sits on a mocap body `part_b`
+//! whose position is the true object offset of a trial. Part A hangs under a carriage
+//! with slide joints `x`, `y`, `z` (the task frame's position relative to the nominal goal,
+//! i.e. the TCP): stiff position servos across the approach, a motor along it pressing
+//! with the task's imposed force; gravity is off so that the settled contact force is the
+//! imposed force. The F/T sensor (`ft_force`, `ft_torque`) sits on site `ft` of body
+//! `part_a`, at the task's sensor origin.
+//!
+//! Collision uses convex pieces only. Part B's top and walls tile the surface exactly
+//! (convex prisms between the hole polygon and a square, boxes outside it, a bottom box):
+//! overlapping pieces would double the contact stiffness where they overlap and skew the
+//! pressure. Part A's contact face is a bed of small spheres on a hexagonal lattice plus a
+//! ring on each boundary, so that the rim pressure spreads evenly as in the map's centroid
+//! model. The STL meshes are visuals only (contype 0). The MJCF also loads in MuJoCo 2.2.2
+//! (`autolimits`, no `multiccd`, Euler integrator with implicit joint damping).
+
+use std::f64::consts::{PI, TAU};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use ftmap::Task;
+use ftmap::cad::{self, Geometry, Role};
+
+use crate::error::{HarnessError, Result};
+
+/// Radius of the spheres of part A's contact bed (m).
+pub const SPHERE_RADIUS: f64 = 0.0001;
+/// Polygon count of a round hole's walls.
+pub const HOLE_SIDES: usize = 48;
+/// Approach starts this far above part B's top (m).
+pub const APPROACH_CLEARANCE: f64 = 0.001;
+/// Mass of the carriage, the heavy moving body (kg).
+pub const CARRIAGE_MASS: f64 = 5.0;
+/// Stiffness of the position servos across the approach (N/m).
+pub const SERVO_KP: f64 = 1.0e6;
+/// Damping along the approach (N s/m): sets the approach speed, force / damping.
+pub const APPROACH_DAMPING: f64 = 1000.0;
+/// Contact solver reference (time constant, damping ratio): stiff contacts.
+const SOLREF: &str = "0.002 1";
+/// Contact impedance (d0, dwidth, width).
+const SOLIMP: &str = "0.99 0.999 0.0005";
+
+/// A closed convex outline in a part's xy plane.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outline {
+    /// A circle of this radius about the axis (m).
+    Circle(f64),
+    /// A convex polygon centred on the axis, counter-clockwise (m).
+    Polygon(Vec<[f64; 2]>),
+}
+
+impl Outline {
+    /// Signed distance of `p` inside the outline (negative outside).
+    fn inside(&self, p: [f64; 2]) -> f64 {
+        match self {
+            Self::Circle(r) => r - p[0].hypot(p[1]),
+            Self::Polygon(v) => (0..v.len())
+                .map(|i| {
+                    let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+                    let len = ex.hypot(ey);
+                    // Inward normal of a counter-clockwise edge: (-ey, ex) / len.
+                    ((p[0] - a[0]) * -ey + (p[1] - a[1]) * ex) / len
+                })
+                .fold(f64::INFINITY, f64::min),
+        }
+    }
+
+    /// Points along the outline moved `offset` outwards (negative: inwards), spaced at most `pitch`.
+    fn ring(&self, offset: f64, pitch: f64) -> Vec<[f64; 2]> {
+        match self {
+            Self::Circle(r) => {
+                let r = r + offset;
+                let n = (TAU * r / pitch).ceil().max(3.0) as usize;
+                (0..n)
+                    .map(|i| {
+                        let t = TAU * i as f64 / n as f64;
+                        [r * t.cos(), r * t.sin()]
+                    })
+                    .collect()
+            }
+            Self::Polygon(v) => {
+                // Regular polygons about the axis: scale by the apothem change.
+                let apothem = self.inside([0.0, 0.0]);
+                let s = (apothem + offset) / apothem;
+                let mut pts = Vec::new();
+                for i in 0..v.len() {
+                    let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                    let len = (b[0] - a[0]).hypot(b[1] - a[1]) * s;
+                    let n = (len / pitch).ceil().max(1.0) as usize;
+                    for k in 0..n {
+                        let t = k as f64 / n as f64;
+                        pts.push([s * (a[0] + t * (b[0] - a[0])), s * (a[1] + t * (b[1] - a[1]))]);
+                    }
+                }
+                pts
+            }
+        }
+    }
+}
+
+/// The contact face of part A: the region the sphere bed covers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Face {
+    /// Outer boundary.
+    pub outer: Outline,
+    /// Inner boundary (a bore), if any.
+    pub inner: Option<Outline>,
+    /// Only points within this distance of the axis can touch part B (m).
+    pub reach: f64,
+    /// Lattice pitch of the bed (m).
+    pub pitch: f64,
+}
+
+impl Face {
+    /// Sphere centres (x, y) of the bed, in the task frame.
+    pub fn bed(&self) -> Vec<[f64; 2]> {
+        let (r, p) = (SPHERE_RADIUS, self.pitch);
+        let near_edge = r + 0.5 * p;
+        let mut pts: Vec<[f64; 2]> = self.outer.ring(-r, p);
+        if let Some(inner) = &self.inner {
+            pts.extend(inner.ring(r, p));
+        }
+        let row = p * 3f64.sqrt() / 2.0;
+        let (ni, nj) = ((self.reach / p).ceil() as i64 + 1, (self.reach / row).ceil() as i64 + 1);
+        for j in -nj..=nj {
+            let shift = if j.rem_euclid(2) == 1 { 0.5 * p } else { 0.0 };
+            for i in -ni..=ni {
+                let q = [i as f64 * p + shift, j as f64 * row];
+                let outside_inner = self.inner.as_ref().is_none_or(|o| -o.inside(q) >= near_edge);
+                if self.outer.inside(q) >= near_edge && outside_inner {
+                    pts.push(q);
+                }
+            }
+        }
+        pts.retain(|q| q[0].hypot(q[1]) <= self.reach);
+        pts
+    }
+}
+
+/// A convex collision piece of part B, in the goal frame (m).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Piece {
+    /// An axis-aligned box: centre and half sizes.
+    Box {
+        /// Centre.
+        center: [f64; 3],
+        /// Half sizes.
+        half: [f64; 3],
+    },
+    /// A vertical prism over a convex polygon, from `z0` to `z1`.
+    Prism {
+        /// The polygon.
+        polygon: Vec<[f64; 2]>,
+        /// Bottom.
+        z0: f64,
+        /// Top.
+        z1: f64,
+    },
+    /// A vertical cylinder about the axis from `z0` to `z1`.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Bottom.
+        z0: f64,
+        /// Top.
+        z1: f64,
+    },
+}
+
+/// Everything a task's scene is generated from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneSpec {
+    /// Task name.
+    pub task: String,
+    /// Visual mesh of part A (file next to the scene).
+    pub mesh_a: String,
+    /// Visual mesh of part B.
+    pub mesh_b: String,
+    /// Part A's contact face.
+    pub face: Face,
+    /// Part B's collision pieces.
+    pub pieces: Vec<Piece>,
+    /// Height of part B's top in the goal frame (m): rim contacts settle at this tcp.z.
+    pub top: f64,
+    /// Sensor origin in the task frame (m).
+    pub sensor_origin: [f64; 3],
+    /// Imposed force (N).
+    pub force: f64,
+    /// Friction coefficient.
+    pub friction: f64,
+}
+
+/// A regular polygon with `n` vertices on radius `r`, the first at angle `phase`.
+fn polygon(r: f64, n: usize, phase: f64) -> Vec<[f64; 2]> {
+    (0..n)
+        .map(|i| {
+            let t = phase + TAU * i as f64 / n as f64;
+            [r * t.cos(), r * t.sin()]
+        })
+        .collect()
+}
+
+/// Part B of a blind hole: prisms between the hole polygon and a square of half side `s`,
+/// four boxes out to the block's sides, a bottom box; tops at `depth`.
+fn pocket(hole: &[[f64; 2]], s: f64, block: [f64; 3], depth: f64) -> Vec<Piece> {
+    let corners = [[s, s], [-s, s], [-s, -s], [s, -s]];
+    let to_square = |v: [f64; 2]| {
+        let k = s / v[0].abs().max(v[1].abs());
+        [v[0] * k, v[1] * k]
+    };
+    let mut pieces = Vec::new();
+    for i in 0..hole.len() {
+        let (a, b) = (hole[i], hole[(i + 1) % hole.len()]);
+        let (ta, tb) = (a[1].atan2(a[0]), b[1].atan2(b[0]));
+        let span = (tb - ta).rem_euclid(TAU);
+        let mut polygon = vec![a, b, to_square(b)];
+        for c in corners {
+            let tc = (c[1].atan2(c[0]) - ta).rem_euclid(TAU);
+            if tc > 0.0 && tc < span {
+                polygon.push(c);
+            }
+        }
+        polygon.push(to_square(a));
+        pieces.push(Piece::Prism { polygon, z0: 0.0, z1: depth });
+    }
+    let (hx, hy) = (block[0] / 2.0, block[1] / 2.0);
+    let zc = depth / 2.0;
+    let strip_y = (hy - s) / 2.0;
+    let strip_x = (hx - s) / 2.0;
+    for sign in [1.0, -1.0] {
+        pieces.push(Piece::Box { center: [0.0, sign * (s + strip_y), zc], half: [hx, strip_y, zc] });
+        pieces.push(Piece::Box { center: [sign * (s + strip_x), 0.0, zc], half: [strip_x, s, zc] });
+    }
+    pieces.push(Piece::Box { center: [0.0, 0.0, -0.001], half: [s, s, 0.001] });
+    pieces
+}
+
+impl SceneSpec {
+    /// The scene of a task from its `task.toml`.
+    ///
+    /// # Errors
+    /// When the task file or its `[geometry]` table is missing or invalid.
+    pub fn of_task(task: &Task) -> Result<Self> {
+        let geometry = cad::geometry_of(&task.path)?;
+        let meshes = cad::meshes(&geometry);
+        let file = |role| meshes.iter().find(|m| m.role == role).map(|m| m.file.to_owned()).unwrap_or_default();
+        let reach_of = |b_radius: f64| b_radius + task.omega.size_trans * 2f64.sqrt() + 0.001;
+        let (face, pieces, top) = match geometry {
+            Geometry::RoundPeg { peg_radius, hole_radius, hole_depth, block, .. } => {
+                let apothem_circ = hole_radius / (PI / HOLE_SIDES as f64).cos();
+                let hole = polygon(apothem_circ, HOLE_SIDES, PI / HOLE_SIDES as f64);
+                let face = Face { outer: Outline::Circle(peg_radius), inner: None, reach: peg_radius, pitch: 0.0005 };
+                (face, pocket(&hole, apothem_circ + 0.001, block, hole_depth), hole_depth)
+            }
+            Geometry::OctagonPeg { peg_across_flats, hole_across_flats, hole_depth, block, .. } => {
+                let octagon = |across: f64| polygon(across / 2.0 / (PI / 8.0).cos(), 8, PI / 8.0);
+                let circ = hole_across_flats / 2.0 / (PI / 8.0).cos();
+                let face = Face {
+                    outer: Outline::Polygon(octagon(peg_across_flats)),
+                    inner: None,
+                    reach: peg_across_flats,
+                    pitch: 0.0005,
+                };
+                (face, pocket(&octagon(hole_across_flats), circ + 0.001, block, hole_depth), hole_depth)
+            }
+            Geometry::GearOnShaft { root_radius, bore_radius, shaft_radius, shaft_length, base_radius, base_height, .. } => {
+                let face = Face {
+                    outer: Outline::Circle(root_radius),
+                    inner: Some(Outline::Circle(bore_radius)),
+                    reach: reach_of(shaft_radius).min(root_radius),
+                    pitch: 0.0006,
+                };
+                let pieces = vec![
+                    Piece::Cylinder { radius: shaft_radius, z0: 0.0, z1: shaft_length },
+                    Piece::Cylinder { radius: base_radius, z0: -base_height, z1: 0.0 },
+                ];
+                (face, pieces, shaft_length)
+            }
+            Geometry::BearingHousing { housing, bore_radius, seat_radius, seat_height, plate, .. } => {
+                let (hx, hy) = (housing[0] / 2.0, housing[1] / 2.0);
+                let face = Face {
+                    outer: Outline::Polygon(vec![[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]]),
+                    inner: Some(Outline::Circle(bore_radius)),
+                    reach: reach_of(seat_radius).min(hx.min(hy) - SPHERE_RADIUS),
+                    pitch: 0.0008,
+                };
+                let pieces = vec![
+                    Piece::Cylinder { radius: seat_radius, z0: 0.0, z1: seat_height },
+                    Piece::Box { center: [0.0, 0.0, -plate[2] / 2.0], half: [plate[0] / 2.0, plate[1] / 2.0, plate[2] / 2.0] },
+                ];
+                (face, pieces, seat_height)
+            }
+        };
+        Ok(Self {
+            task: task.name.clone(),
+            mesh_a: file(Role::A),
+            mesh_b: file(Role::B),
+            face,
+            pieces,
+            top,
+            sensor_origin: task.contact.sensor_origin,
+            force: task.contact.force,
+            friction: task.contact.friction,
+        })
+    }
+
+    /// The MJCF text of the scene.
+    pub fn mjcf(&self) -> String {
+        let mut x = String::new();
+        let f = |v: f64| fmt_num(v);
+        let v3 = |v: [f64; 3]| format!("{} {} {}", f(v[0]), f(v[1]), f(v[2]));
+        let damping_xy = 2.0 * (SERVO_KP * CARRIAGE_MASS).sqrt();
+        let bed = self.face.bed();
+        let _ = writeln!(x, "<!-- Generated by `harness scene --task {}` from models_mjcf/{}/task.toml: do not edit. -->", self.task, self.task);
+        let _ = writeln!(x, "<mujoco model=\"{}\">", self.task);
+        let _ = writeln!(x, "  <compiler autolimits=\"true\" angle=\"radian\" meshdir=\".\"/>");
+        let _ = writeln!(x, "  <option timestep=\"0.001\" cone=\"elliptic\" gravity=\"0 0 0\"/>");
+        let _ = writeln!(x, "  <size njmax=\"6000\" nconmax=\"2000\"/>");
+        let _ = writeln!(x, "  <default>");
+        let _ = writeln!(
+            x,
+            "    <geom condim=\"3\" friction=\"{} 0.005 0.0001\" solref=\"{SOLREF}\" solimp=\"{SOLIMP}\" rgba=\"0.6 0.6 0.65 1\"/>",
+            f(self.friction)
+        );
+        let _ = writeln!(x, "    <default class=\"visual\"><geom contype=\"0\" conaffinity=\"0\" group=\"1\"/></default>");
+        let _ = writeln!(x, "  </default>");
+        let _ = writeln!(x, "  <asset>");
+        let _ = writeln!(x, "    <mesh name=\"visual_a\" file=\"{}\"/>", self.mesh_a);
+        let _ = writeln!(x, "    <mesh name=\"visual_b\" file=\"{}\"/>", self.mesh_b);
+        for (i, p) in self.pieces.iter().enumerate() {
+            if let Piece::Prism { polygon, z0, z1 } = p {
+                let verts: Vec<String> =
+                    [z0, z1].iter().flat_map(|z| polygon.iter().map(move |q| format!("{} {} {}", f(q[0]), f(q[1]), f(**z)))).collect();
+                let _ = writeln!(x, "    <mesh name=\"piece{i}\" vertex=\"{}\"/>", verts.join("  "));
+            }
+        }
+        let _ = writeln!(x, "  </asset>");
+        let _ = writeln!(x, "  <worldbody>");
+        let _ = writeln!(x, "    <light pos=\"0 -0.1 0.3\" dir=\"0 0.3 -1\"/>");
+        let _ = writeln!(x, "    <body name=\"part_b\" mocap=\"true\" pos=\"0 0 0\">");
+        let _ = writeln!(x, "      <geom name=\"visual_b\" class=\"visual\" type=\"mesh\" mesh=\"visual_b\" rgba=\"0.45 0.5 0.6 0.5\"/>");
+        for (i, p) in self.pieces.iter().enumerate() {
+            let _ = match p {
+                Piece::Box { center, half } => {
+                    writeln!(x, "      <geom name=\"piece{i}\" type=\"box\" pos=\"{}\" size=\"{}\" rgba=\"0.45 0.5 0.6 1\"/>", v3(*center), v3(*half))
+                }
+                Piece::Prism { .. } => writeln!(x, "      <geom name=\"piece{i}\" type=\"mesh\" mesh=\"piece{i}\" rgba=\"0.45 0.5 0.6 1\"/>"),
+                Piece::Cylinder { radius, z0, z1 } => writeln!(
+                    x,
+                    "      <geom name=\"piece{i}\" type=\"cylinder\" pos=\"0 0 {}\" size=\"{} {}\" rgba=\"0.45 0.5 0.6 1\"/>",
+                    f((z0 + z1) / 2.0),
+                    f(*radius),
+                    f((z1 - z0) / 2.0)
+                ),
+            };
+        }
+        let _ = writeln!(x, "    </body>");
+        let start = self.top + APPROACH_CLEARANCE;
+        let _ = writeln!(x, "    <body name=\"carriage\" pos=\"0 0 0\">");
+        let _ = writeln!(x, "      <joint name=\"x\" type=\"slide\" axis=\"1 0 0\" damping=\"{}\"/>", f(damping_xy));
+        let _ = writeln!(x, "      <joint name=\"y\" type=\"slide\" axis=\"0 1 0\" damping=\"{}\"/>", f(damping_xy));
+        let _ = writeln!(x, "      <joint name=\"z\" type=\"slide\" axis=\"0 0 1\" damping=\"{}\" ref=\"0\"/>", f(APPROACH_DAMPING));
+        let _ = writeln!(x, "      <inertial pos=\"0 0 0.1\" mass=\"{}\" diaginertia=\"0.05 0.05 0.05\"/>", f(CARRIAGE_MASS));
+        let _ = writeln!(x, "      <body name=\"part_a\" pos=\"0 0 0\">");
+        let _ = writeln!(x, "        <inertial pos=\"0 0 0.02\" mass=\"0.05\" diaginertia=\"1e-5 1e-5 1e-5\"/>");
+        let _ = writeln!(x, "        <geom name=\"visual_a\" class=\"visual\" type=\"mesh\" mesh=\"visual_a\" rgba=\"0.8 0.6 0.3 1\"/>");
+        for (i, q) in bed.iter().enumerate() {
+            let _ = writeln!(
+                x,
+                "        <geom name=\"bed{i}\" type=\"sphere\" size=\"{}\" pos=\"{} {} {}\" rgba=\"0.8 0.3 0.2 1\"/>",
+                f(SPHERE_RADIUS),
+                f(q[0]),
+                f(q[1]),
+                f(SPHERE_RADIUS)
+            );
+        }
+        let _ = writeln!(x, "        <site name=\"ft\" pos=\"{}\" size=\"0.002\"/>", v3(self.sensor_origin));
+        let _ = writeln!(x, "      </body>");
+        let _ = writeln!(x, "    </body>");
+        let _ = writeln!(x, "  </worldbody>");
+        let _ = writeln!(x, "  <actuator>");
+        let _ = writeln!(x, "    <position name=\"servo_x\" joint=\"x\" kp=\"{}\"/>", f(SERVO_KP));
+        let _ = writeln!(x, "    <position name=\"servo_y\" joint=\"y\" kp=\"{}\"/>", f(SERVO_KP));
+        let _ = writeln!(x, "    <motor name=\"press\" joint=\"z\" ctrlrange=\"{} {}\"/>", f(-4.0 * self.force), f(4.0 * self.force));
+        let _ = writeln!(x, "  </actuator>");
+        let _ = writeln!(x, "  <sensor>");
+        let _ = writeln!(x, "    <force name=\"ft_force\" site=\"ft\"/>");
+        let _ = writeln!(x, "    <torque name=\"ft_torque\" site=\"ft\"/>");
+        let _ = writeln!(x, "  </sensor>");
+        let _ = writeln!(x, "  <keyframe>");
+        let _ = writeln!(x, "    <key name=\"start\" qpos=\"0 0 {}\"/>", f(start));
+        let _ = writeln!(x, "  </keyframe>");
+        let _ = writeln!(x, "</mujoco>");
+        x
+    }
+}
+
+/// A number as MJCF text: shortest round-trip form, no exponent surprises.
+fn fmt_num(v: f64) -> String {
+    let v = if v == 0.0 { 0.0 } else { v };
+    format!("{v}")
+}
+
+/// The scene file of a task: `scene.xml` next to its `task.toml`.
+pub fn scene_path(task: &Task) -> PathBuf {
+    task.path.parent().unwrap_or(Path::new(".")).join("scene.xml")
+}
+
+/// Writes a task's scene file; returns its path.
+///
+/// # Errors
+/// When the task has no `[geometry]` or the file cannot be written.
+pub fn write_scene(task: &Task) -> Result<PathBuf> {
+    let path = scene_path(task);
+    let text = SceneSpec::of_task(task)?.mjcf();
+    std::fs::write(&path, text).map_err(|e| HarnessError::io(&path, e))?;
+    Ok(path)
+}
+
+/// Whether a task's committed scene file equals what its `task.toml` generates.
+///
+/// # Errors
+/// When the task has no `[geometry]`.
+pub fn scene_is_current(task: &Task) -> Result<bool> {
+    let want = SceneSpec::of_task(task)?.mjcf();
+    Ok(std::fs::read_to_string(scene_path(task)).is_ok_and(|have| have == want))
+}
+
+/// The tasks whose `task.toml` has a `[geometry]` table (those that get a scene).
+///
+/// # Errors
+/// When the models folder cannot be read.
+pub fn tasks_with_scenes() -> Result<Vec<Task>> {
+    cad::task_dirs_with_geometry(&ftmap::task::models_root())?
+        .iter()
+        .map(|d| Task::load(&d.join("task.toml")).map_err(HarnessError::from))
+        .collect()
+}

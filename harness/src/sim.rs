@@ -1,0 +1,136 @@
+//! One task's MuJoCo work cell: load the generated scene, place part B per trial, and run
+//! contact motions (approach along a with the imposed force until the contact settles).
+//!
+//! A contact motion starts from a reset state: the lift and the transfer to the next
+//! approach point happen in free space and are not simulated; the carriage is placed
+//! `APPROACH_CLEARANCE` above part B's top at the commanded (x, y) and the press motor
+//! pushes with the imposed force. So each contact is a pure function of the object offset
+//! and the commanded point (the FMPy script reproduces it step for step).
+
+use std::path::Path;
+
+use mujoco_rs::prelude::*;
+
+use crate::error::{HarnessError, Result};
+use crate::scene::{APPROACH_CLEARANCE, SceneSpec};
+
+/// Longest contact motion (steps of 1 ms) before it is reported as not settled.
+pub const MAX_STEPS: usize = 2000;
+/// The contact has settled when the approach speed stays below this (m/s) ...
+pub const SETTLE_SPEED: f64 = 1.0e-4;
+/// ... for this many consecutive steps with at least one contact.
+pub const SETTLE_STEPS: usize = 20;
+
+/// What one contact motion ends with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// Raw sensor values: MuJoCo's force and torque sensors at site `ft`, in the site frame.
+    pub raw: [f64; 6],
+    /// Task frame position relative to the nominal goal frame at the end (m).
+    pub tcp: [f64; 3],
+    /// Whether the motion settled within [`MAX_STEPS`].
+    pub settled: bool,
+    /// Simulated time of the motion (s).
+    pub time: f64,
+}
+
+/// A loaded scene with its data, ready for contact motions.
+pub struct Sim {
+    data: MjData<Box<MjModel>>,
+    spec: SceneSpec,
+    qpos: [usize; 3],
+    dof_z: usize,
+    actuators: [usize; 3],
+    sensors: [usize; 2],
+    mocap: usize,
+    object: [f64; 2],
+    simulated: f64,
+}
+
+fn id(model: &MjModel, kind: MjtObjBase, what: &'static str, name: &'static str) -> Result<usize> {
+    model.name_to_id(kind, name).ok_or(HarnessError::SceneElement { kind: what, name })
+}
+
+impl Sim {
+    /// Loads `scene` (a generated scene file) for the task described by `spec`.
+    ///
+    /// # Errors
+    /// When MuJoCo is not 3.17.0, refuses the file, or a named element is missing.
+    pub fn load(scene: &Path, spec: SceneSpec) -> Result<Self> {
+        crate::runtime::check_mujoco()?;
+        if !scene.is_file() {
+            return Err(HarnessError::Scene {
+                path: scene.to_owned(),
+                reason: format!("no such file (generate it: `harness scene --task {}`)", spec.task),
+            });
+        }
+        let model = MjModel::from_xml(scene).map_err(|e| HarnessError::Scene { path: scene.to_owned(), reason: e.to_string() })?;
+        let joint = |name| id(&model, MjtObjBase::mjOBJ_JOINT, "joint", name);
+        let (jx, jy, jz) = (joint("x")?, joint("y")?, joint("z")?);
+        let adr = model.jnt_qposadr();
+        let qpos = [adr[jx] as usize, adr[jy] as usize, adr[jz] as usize];
+        let dof_z = model.jnt_dofadr()[jz] as usize;
+        let act = |name| id(&model, MjtObjBase::mjOBJ_ACTUATOR, "actuator", name);
+        let actuators = [act("servo_x")?, act("servo_y")?, act("press")?];
+        let sensor = |name| id(&model, MjtObjBase::mjOBJ_SENSOR, "sensor", name);
+        let sensors = [
+            model.sensor_adr()[sensor("ft_force")?] as usize,
+            model.sensor_adr()[sensor("ft_torque")?] as usize,
+        ];
+        let body_b = id(&model, MjtObjBase::mjOBJ_BODY, "body", "part_b")?;
+        let mocap = usize::try_from(model.body_mocapid()[body_b])
+            .map_err(|_| HarnessError::Scene { path: scene.to_owned(), reason: "body part_b is not a mocap body".into() })?;
+        let data = MjData::new(Box::new(model));
+        Ok(Self { data, spec, qpos, dof_z, actuators, sensors, mocap, object: [0.0; 2], simulated: 0.0 })
+    }
+
+    /// The scene description this simulation was generated from.
+    pub fn spec(&self) -> &SceneSpec {
+        &self.spec
+    }
+
+    /// Places part B at the true object offset (x, y) relative to the nominal goal (m).
+    pub fn set_object(&mut self, xy: [f64; 2]) {
+        self.object = xy;
+    }
+
+    /// Total simulated time so far (s).
+    pub fn simulated(&self) -> f64 {
+        self.simulated
+    }
+
+    /// One contact motion: approach at the commanded task-frame position `xy` (relative to
+    /// the nominal goal) with the imposed force until the contact settles.
+    pub fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {
+        let d = &mut self.data;
+        d.reset();
+        d.mocap_pos_mut()[self.mocap] = [self.object[0], self.object[1], 0.0];
+        let start = [xy[0], xy[1], self.spec.top + APPROACH_CLEARANCE];
+        for (k, &q) in self.qpos.iter().enumerate() {
+            d.qpos_mut()[q] = start[k];
+        }
+        let ctrl = [xy[0], xy[1], -self.spec.force];
+        for (k, &a) in self.actuators.iter().enumerate() {
+            d.ctrl_mut()[a] = ctrl[k];
+        }
+        let mut calm = 0;
+        let mut steps = 0;
+        while steps < MAX_STEPS && calm < SETTLE_STEPS {
+            d.step();
+            steps += 1;
+            if d.qvel()[self.dof_z].abs() < SETTLE_SPEED && d.ncon() > 0 {
+                calm += 1;
+            } else {
+                calm = 0;
+            }
+        }
+        let s = d.sensordata();
+        let (f, t) = (self.sensors[0], self.sensors[1]);
+        let raw = [s[f], s[f + 1], s[f + 2], s[t], s[t + 1], s[t + 2]];
+        let q = d.qpos();
+        let tcp = [q[self.qpos[0]], q[self.qpos[1]], q[self.qpos[2]]];
+        let time = d.time();
+        self.simulated += time;
+        Contact { raw, tcp, settled: calm >= SETTLE_STEPS, time }
+    }
+}

@@ -1,0 +1,180 @@
+//! One assembly trial: the closed loop of the paper's Algorithm 1 (contact, measure, move
+//! to the estimate, contact again) or the blind spiral search it is compared with.
+//!
+//! Success: a contact motion settles with the task frame less than [`SUCCESS_HEIGHT`]
+//! above the goal, i.e. the part slid down to (near) the goal depth. Every contact motion
+//! counts, the successful one included; a trial ends as a failure after `max_contacts`
+//! motions or `max_sim_time` of simulated time.
+
+use std::time::Instant;
+
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+
+use crate::error::Result;
+use crate::fmu_driver::{Estimate, Fmu, Settings};
+use crate::sensor::{Noise, map_wrench};
+use crate::sim::Sim;
+
+/// A contact ending with the task frame below this height above the goal is a success (m).
+pub const SUCCESS_HEIGHT: f64 = 0.001;
+
+/// How the next approach point is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Strategy {
+    /// Move to the FMU's estimate after each contact (Algorithm 1).
+    Pf,
+    /// An Archimedean spiral of contact motions about the nominal goal.
+    Spiral,
+}
+
+/// Limits and settings of a trial.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrialConfig {
+    /// Strategy.
+    pub strategy: Strategy,
+    /// Most contact motions before the trial fails.
+    pub max_contacts: usize,
+    /// Most simulated time before the trial fails (s).
+    pub max_sim_time: f64,
+    /// Sensor noise.
+    pub noise: Noise,
+    /// Spiral pitch and spacing of its contact points (m).
+    pub spiral_step: f64,
+    /// The spiral ends at this radius (m): it then covers Omega.
+    pub spiral_radius: f64,
+    /// FMU settings (the seed is set per trial).
+    pub settings: Settings,
+}
+
+/// One contact motion of a trial.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// Commanded and settled task frame position (m).
+    pub tcp: [f64; 3],
+    /// Wrench handed to the estimator (map convention, with noise).
+    pub wrench: [f64; 6],
+    /// The FMU's estimate after this contact (pf only).
+    pub estimate: Option<Estimate>,
+}
+
+/// What a trial ended with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrialResult {
+    /// True object offset (m).
+    pub offset: [f64; 2],
+    /// Contact motions made.
+    pub contacts: usize,
+    /// Whether the part reached the goal depth.
+    pub success: bool,
+    /// Distance of the last approach point from the true offset (m).
+    pub final_error: f64,
+    /// Wall-clock time of the trial (s).
+    pub wall: f64,
+    /// Simulated time of the trial (s).
+    pub sim_time: f64,
+    /// Wall-clock time spent in MuJoCo (s).
+    pub sim_wall: f64,
+    /// Every contact motion.
+    pub steps: Vec<Step>,
+}
+
+/// Points of an Archimedean spiral r = pitch * theta / 2 pi about the origin, spaced about
+/// `step` along the curve, the first at the origin, out to radius `radius`.
+pub fn spiral(step: f64, radius: f64) -> Vec<[f64; 2]> {
+    let b = step / std::f64::consts::TAU;
+    let mut pts = vec![[0.0, 0.0]];
+    let mut theta: f64 = std::f64::consts::TAU; // first turn at r = step
+    while b * theta <= radius + step {
+        let r = b * theta;
+        pts.push([r * theta.cos(), r * theta.sin()]);
+        theta += step / (r * r + b * b).sqrt();
+    }
+    pts
+}
+
+/// Runs one trial against the true `offset` with seed `seed` (noise and FMU seed).
+///
+/// # Errors
+/// When the FMU fails.
+pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, cfg: &TrialConfig, offset: [f64; 2], seed: u64) -> Result<TrialResult> {
+    let start = Instant::now();
+    let sim_start = sim.simulated();
+    sim.set_object(offset);
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut estimator = match (cfg.strategy, fmu) {
+        (Strategy::Pf, Some(f)) => {
+            let settings = Settings { seed: Some((seed % i32::MAX as u64) as i32), ..cfg.settings.clone() };
+            Some(f.estimator(&settings)?)
+        }
+        _ => None,
+    };
+    let spiral_pts = match cfg.strategy {
+        Strategy::Spiral => spiral(cfg.spiral_step, cfg.spiral_radius),
+        Strategy::Pf => Vec::new(),
+    };
+    let mut target = [0.0, 0.0];
+    let mut steps = Vec::new();
+    let mut success = false;
+    let mut sim_wall = 0.0;
+    while steps.len() < cfg.max_contacts && sim.simulated() - sim_start < cfg.max_sim_time {
+        if cfg.strategy == Strategy::Spiral {
+            match spiral_pts.get(steps.len()) {
+                Some(p) => target = *p,
+                None => break,
+            }
+        }
+        let t0 = Instant::now();
+        let c = sim.contact_motion(target);
+        sim_wall += t0.elapsed().as_secs_f64();
+        let wrench = cfg.noise.apply(map_wrench(c.raw), &mut rng);
+        if c.tcp[2] < SUCCESS_HEIGHT {
+            steps.push(Step { tcp: c.tcp, wrench, estimate: None });
+            success = true;
+            break;
+        }
+        let estimate = match estimator.as_mut() {
+            Some(e) => {
+                let est = e.measure(wrench, c.tcp)?;
+                target = est.object;
+                Some(est)
+            }
+            None => None,
+        };
+        steps.push(Step { tcp: c.tcp, wrench, estimate });
+    }
+    let last = steps.last().map_or([0.0; 2], |s| [s.tcp[0], s.tcp[1]]);
+    Ok(TrialResult {
+        offset,
+        contacts: steps.len(),
+        success,
+        final_error: (last[0] - offset[0]).hypot(last[1] - offset[1]),
+        wall: start.elapsed().as_secs_f64(),
+        sim_time: sim.simulated() - sim_start,
+        sim_wall,
+        steps,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_spiral_covers_its_disc_with_the_asked_spacing() {
+        let pts = spiral(0.0001, 0.002);
+        assert_eq!(pts[0], [0.0, 0.0]);
+        for w in pts.windows(2).skip(1) {
+            let d = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+            assert!(d < 0.000101 && d > 0.00009, "{d}");
+        }
+        // every point of the disc lies within a pitch of some spiral point
+        for k in 0..200 {
+            let (r, t) = (0.002 * (k as f64 / 200.0).sqrt(), k as f64 * 2.4);
+            let q = [r * t.cos(), r * t.sin()];
+            let near = pts.iter().map(|p| (p[0] - q[0]).hypot(p[1] - q[1])).fold(f64::INFINITY, f64::min);
+            assert!(near < 0.0001, "{q:?} {near}");
+        }
+    }
+}
