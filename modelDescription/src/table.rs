@@ -104,8 +104,7 @@ const fn param(
     ty: VarType,
     start: Start,
     unit: &'static str,
-    min: Option<f64>,
-    max: Option<f64>,
+    [min, max]: [Option<f64>; 2],
     description: &'static str,
 ) -> Variable {
     Variable {
@@ -177,8 +176,7 @@ pub const VARIABLES: &[Variable] = &[
         VarType::String,
         Start::String("peg_in_hole.ftmap"),
         "",
-        None,
-        None,
+        [None, None],
         "FT-Map file: a name in the FMU's resources folder or an absolute path",
     ),
     param(
@@ -187,8 +185,7 @@ pub const VARIABLES: &[Variable] = &[
         Integer,
         Start::Integer(4000),
         "",
-        Some(10.0),
-        Some(1_000_000.0),
+        [Some(10.0), Some(1_000_000.0)],
         "Number of particles",
     ),
     param(
@@ -197,8 +194,7 @@ pub const VARIABLES: &[Variable] = &[
         Integer,
         Start::Integer(1),
         "",
-        None,
-        None,
+        [None, None],
         "Seed of the random numbers: equal seeds and inputs give equal outputs",
     ),
     param(
@@ -207,8 +203,7 @@ pub const VARIABLES: &[Variable] = &[
         Integer,
         Start::Integer(20),
         "",
-        Some(1.0),
-        Some(1000.0),
+        [Some(1.0), Some(1000.0)],
         "Filter iterations (weight, resample, jitter) per contact measurement",
     ),
     param(
@@ -217,8 +212,7 @@ pub const VARIABLES: &[Variable] = &[
         Real,
         Start::Real(1.0),
         "N",
-        Some(1e-6),
-        Some(1e6),
+        [Some(1e-6), Some(1e6)],
         "Standard deviation of a measured force component",
     ),
     param(
@@ -227,8 +221,7 @@ pub const VARIABLES: &[Variable] = &[
         Real,
         Start::Real(0.01),
         "N.m",
-        Some(1e-9),
-        Some(1e6),
+        [Some(1e-9), Some(1e6)],
         "Standard deviation of a measured torque component",
     ),
     param(
@@ -237,8 +230,7 @@ pub const VARIABLES: &[Variable] = &[
         Real,
         Start::Real(0.0005),
         "m",
-        Some(0.0),
-        Some(1.0),
+        [Some(0.0), Some(1.0)],
         "Standard deviation of the contact height tcp.z against the map's depth; 0: depth unused",
     ),
     param(
@@ -247,8 +239,7 @@ pub const VARIABLES: &[Variable] = &[
         Real,
         Start::Real(0.2),
         "",
-        Some(0.0),
-        Some(10.0),
+        [Some(0.0), Some(10.0)],
         "Jitter after each iteration, standard deviation in grid intervals of each DOF",
     ),
     param(
@@ -257,8 +248,7 @@ pub const VARIABLES: &[Variable] = &[
         Real,
         Start::Real(0.0001),
         "m",
-        Some(1e-9),
-        Some(1.0),
+        [Some(1e-9), Some(1.0)],
         "Radius around the estimate within which particle weight counts as confidence \
          (rotations: the same number of grid intervals)",
     ),
@@ -268,8 +258,7 @@ pub const VARIABLES: &[Variable] = &[
         Real,
         Start::Real(0.9),
         "",
-        Some(0.0),
-        Some(1.0),
+        [Some(0.0), Some(1.0)],
         "Confidence above which `converged` is true",
     ),
     param(
@@ -278,8 +267,7 @@ pub const VARIABLES: &[Variable] = &[
         Integer,
         Start::Integer(1),
         "",
-        Some(0.0),
-        Some(1.0),
+        [Some(0.0), Some(1.0)],
         "Map lookup: 0 nearest cell, 1 multilinear",
     ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------

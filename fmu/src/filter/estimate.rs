@@ -61,8 +61,7 @@ impl Estimate {
             }
         }
         let mut parent: Vec<usize> = (0..cells.len()).collect();
-        for c in 0..cells.len() {
-            let key = cells[c].0;
+        for (c, &(key, ..)) in cells.iter().enumerate() {
             for a in axes {
                 if (key / a.stride) % a.count + 1 < a.count
                     && let Ok(nb) = cells.binary_search_by_key(&(key + a.stride), |x| x.0)
@@ -73,9 +72,9 @@ impl Estimate {
             }
         }
         let mut comp_weight = vec![0.0f64; cells.len()];
-        for c in 0..cells.len() {
+        for (c, cell) in cells.iter().enumerate() {
             let r = root(&mut parent, c);
-            comp_weight[r] += cells[c].1;
+            comp_weight[r] += cell.1;
         }
         let total: f64 = comp_weight.iter().sum();
         let clusters = comp_weight

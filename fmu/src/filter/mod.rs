@@ -267,7 +267,8 @@ impl Filter {
         self.lookup
             .log_likelihood(interp, &self.pos, shift, meas, inv_var, &mut ll);
         let best = ll.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-        if !(best >= UNDERFLOW) {
+        // NaN cannot occur (inputs are checked finite); `best` is -inf only for no particle.
+        if best < UNDERFLOW {
             // No particle explains the measurement: start a share of them afresh, forget the
             // old weights, and weigh again.
             report.respread += 1;
