@@ -1,0 +1,27 @@
+//! Helpers shared by the harness's integration tests.
+
+#![allow(dead_code)]
+
+use std::sync::OnceLock;
+
+use ftmap::generate::{GenerateOptions, generate};
+use ftmap::{FtMap, Task};
+use harness::scene::{SceneSpec, scene_path};
+use harness::sim::Sim;
+
+/// The peg_in_hole task and a simulation of its committed scene.
+pub fn peg() -> (Task, Sim) {
+    let task = Task::find("peg_in_hole").unwrap();
+    let spec = SceneSpec::of_task(&task).unwrap();
+    let sim = Sim::load(&scene_path(&task), spec).unwrap();
+    (task, sim)
+}
+
+/// The peg_in_hole map computed from the CAD meshes (centroid model, CPU backend).
+pub fn computed_peg_map() -> &'static FtMap {
+    static MAP: OnceLock<FtMap> = OnceLock::new();
+    MAP.get_or_init(|| {
+        let task = Task::find("peg_in_hole").unwrap();
+        generate(&task, &ftmap::cpu::CpuBackend, &GenerateOptions::default(), &|_| {}).unwrap()
+    })
+}

@@ -1,0 +1,27 @@
+//! A measured map (contact motions in MuJoCo) against the map computed from CAD.
+
+mod common;
+
+use harness::compare::compare;
+use harness::scan::scan;
+
+#[test]
+fn a_scan_of_a_small_grid_agrees_in_sign_with_the_computed_map() {
+    let (task, mut sim) = common::peg();
+    let measured = scan(&mut sim, &task, 0.001, 0.003).unwrap();
+    assert_eq!(measured.grid().cells(), 49);
+    assert_eq!(measured.meta().model, ftmap::WrenchModel::Measured);
+    let a = compare(&measured, common::computed_peg_map()).unwrap();
+    for ch in &a.channels[3..5] {
+        assert!(ch.sign_agreement == 1.0, "{}: {}", ch.name, a.table());
+        assert!(ch.correlation > 0.95, "{}: {}", ch.name, a.table());
+    }
+    assert!(a.torque_angle_max < 5f64.to_radians(), "{}", a.table());
+    // Round trip through the map file format.
+    let dir = std::env::temp_dir().join(format!("harness-scan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("measured.ftmap");
+    ftmap::format::save(&measured, &path).unwrap();
+    assert_eq!(ftmap::format::load(&path).unwrap(), measured);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,90 @@
+//! Every generated scene loads in MuJoCo 3.17.0 and in Debian's MuJoCo 2.2.2, and a part A
+//! resting off-centre on part B gives a torque along z x offset in both.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use ftmap::Task;
+use ftmap::generate::{GenerateOptions, generate};
+use harness::scene::{APPROACH_CLEARANCE, SceneSpec, scene_path, tasks_with_scenes};
+use harness::sensor::map_wrench;
+use harness::sim::Sim;
+
+const OFFSET: [f64; 2] = [0.002, 0.0];
+
+/// (raw wrench, tcp.z) of a rim contact at OFFSET in MuJoCo 3.17.0.
+fn rim_contact(task: &Task) -> ([f64; 6], f64) {
+    let mut sim = Sim::load(&scene_path(task), SceneSpec::of_task(task).unwrap()).unwrap();
+    sim.set_object(OFFSET);
+    let c = sim.contact_motion([0.0, 0.0]);
+    assert!(c.settled, "{}", task.name);
+    (c.raw, c.tcp[2])
+}
+
+#[test]
+fn every_scene_loads_and_its_rim_wrench_agrees_with_the_computed_map() {
+    let tasks = tasks_with_scenes().unwrap();
+    assert_eq!(tasks.len(), 4);
+    for task in &tasks {
+        let spec = SceneSpec::of_task(task).unwrap();
+        let (raw, z) = rim_contact(task);
+        let w = map_wrench(raw);
+        let map = generate(task, &ftmap::cpu::CpuBackend, &GenerateOptions::default(), &|_| {}).unwrap();
+        let m = map.interpolate(&OFFSET).unwrap();
+        assert!((w[2] - task.contact.force).abs() < 0.5, "{}: {w:?}", task.name);
+        // Offset along +x: the torque lies along y (+y where B has the hole, -y where A
+        // has the bore), as in the map, within 15 % in magnitude.
+        assert!(w[4].abs() > 0.02 && w[3].abs() < 0.05 * w[4].abs(), "{}: {w:?}", task.name);
+        assert_eq!(w[4].signum(), m[4].signum(), "{}: sim {w:?} map {m:?}", task.name);
+        assert!((w[4] - m[4]).abs() < 0.15 * m[4].abs(), "{}: sim {w:?} map {m:?}", task.name);
+        assert!((z - spec.top).abs() < 1e-4 && (z - m[6]).abs() < 1e-4, "{}: rests at {z}, top {}, map depth {}", task.name, spec.top, m[6]);
+    }
+}
+
+fn build_loader(dir: &Path) -> Option<PathBuf> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mujoco22_loader.c");
+    let exe = dir.join("mujoco22_loader");
+    // Link against the system's libmujoco (Debian's 2.2.2), not the project's 3.17.0.
+    let out = Command::new("cc")
+        .arg(&src)
+        .args(["-o"])
+        .arg(&exe)
+        .args(["-L/usr/lib/x86_64-linux-gnu", "-l:libmujoco.so.2.2.2", "-lm"])
+        .output()
+        .ok()?;
+    if !out.status.success() {
+        eprintln!("{}", String::from_utf8_lossy(&out.stderr));
+        return None;
+    }
+    Some(exe)
+}
+
+#[test]
+fn every_scene_loads_in_mujoco_2_2_2_with_the_same_torque_sign() {
+    if !Path::new("/usr/include/mujoco/mujoco.h").is_file() {
+        eprintln!("skipped: MuJoCo 2.2.2 headers missing (scripts/setup.sh installs libmujoco-dev)");
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("harness-mj22-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let exe = build_loader(&dir).expect("cc -lmujoco against MuJoCo 2.2.2 failed");
+    for task in tasks_with_scenes().unwrap() {
+        let spec = SceneSpec::of_task(&task).unwrap();
+        let out = Command::new(&exe)
+            .arg(scene_path(&task))
+            .args([OFFSET[0], OFFSET[1], spec.top + APPROACH_CLEARANCE, spec.force].map(|v| v.to_string()))
+            .env_remove("LD_LIBRARY_PATH")
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{}: {}", task.name, String::from_utf8_lossy(&out.stderr));
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], "version 222", "{}", task.name);
+        let raw22: Vec<f64> = lines[1].split_whitespace().map(|v| v.parse().unwrap()).collect();
+        let (raw, _) = rim_contact(&task);
+        assert!(raw22[4].abs() > 0.02, "{}: 2.2.2 gives {raw22:?}", task.name);
+        assert_eq!(raw22[4].signum(), raw[4].signum(), "{}: 2.2.2 {raw22:?} vs 3.17 {raw:?}", task.name);
+        assert_eq!(raw22[2].signum(), raw[2].signum(), "{}: 2.2.2 {raw22:?} vs 3.17 {raw:?}", task.name);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
