@@ -11,9 +11,9 @@ use harness::sim::Sim;
 
 /// The peg_in_hole task and a simulation of its committed scene.
 pub fn peg() -> (Task, Sim) {
-    let task = Task::find("peg_in_hole").unwrap();
-    let spec = SceneSpec::of_task(&task).unwrap();
-    let sim = Sim::load(&scene_path(&task), spec).unwrap();
+    let task = Task::find("peg_in_hole").expect("task peg_in_hole");
+    let spec = SceneSpec::of_task(&task).expect("its scene description");
+    let sim = Sim::load(&scene_path(&task), spec).expect("its committed scene");
     (task, sim)
 }
 
@@ -21,7 +21,7 @@ pub fn peg() -> (Task, Sim) {
 pub fn computed_peg_map() -> &'static FtMap {
     static MAP: OnceLock<FtMap> = OnceLock::new();
     MAP.get_or_init(|| {
-        let task = Task::find("peg_in_hole").unwrap();
-        generate(&task, &ftmap::cpu::CpuBackend, &GenerateOptions::default(), &|_| {}).unwrap()
+        let task = Task::find("peg_in_hole").expect("task peg_in_hole");
+        generate(&task, &ftmap::cpu::CpuBackend, &GenerateOptions::default(), &|_| {}).expect("its computed map")
     })
 }
