@@ -14,7 +14,8 @@ const OFFSET: [f64; 2] = [0.002, 0.0];
 
 /// (raw wrench, tcp.z) of a rim contact at OFFSET in MuJoCo 3.17.0.
 fn rim_contact(task: &Task) -> ([f64; 6], f64) {
-    let mut sim = Sim::load(&scene_path(task), SceneSpec::of_task(task).unwrap()).unwrap();
+    let spec = SceneSpec::of_task(task).expect("scene description");
+    let mut sim = Sim::load(&scene_path(task), spec).expect("committed scene");
     sim.set_object(OFFSET);
     let c = sim.contact_motion([0.0, 0.0]);
     assert!(c.settled, "{}", task.name);
