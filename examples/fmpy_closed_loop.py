@@ -1,0 +1,161 @@
+#!/usr/bin/env python3
+"""The harness's closed loop (the paper's Algorithm 1) in Python: the generated MuJoCo scene
+through MuJoCo's Python bindings (mujoco==3.17.0) and FtFusion.fmu through FMPy.
+
+It repeats the Rust harness's contact motion step for step (harness/src/sim.rs): reset,
+place part B (mocap body) at the true offset, put the carriage 1 mm above part B's top (the
+scene's `start` keyframe height) at the commanded point, press with the task's force until
+the approach speed stays below 1e-4 m/s for 20 steps with a contact (at most 2000 steps).
+The wrench handed to the FMU is the negated raw sensor reading (harness/src/sensor.rs),
+without noise; the FMU's seed of trial i is seed + i. Success: the task frame settles less
+than 1 mm above the goal.
+
+    python3 examples/fmpy_closed_loop.py --offset 0.002,-0.0015 --offset 0.001,0.003
+    python3 examples/fmpy_closed_loop.py --offsets-csv out/h20/trials.csv --seed 1 --json
+"""
+
+import argparse
+import csv
+import json
+import sys
+import tomllib
+from pathlib import Path
+
+import mujoco
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+
+ROOT = Path(__file__).resolve().parent.parent
+MAX_STEPS, SETTLE_SPEED, SETTLE_STEPS = 2000, 1.0e-4, 20
+SUCCESS_HEIGHT = 0.001
+STEP = 0.001
+
+
+class Cell:
+    """The task's scene in MuJoCo 3.17 (Python bindings)."""
+
+    def __init__(self, task):
+        folder = ROOT / "models_mjcf" / task
+        self.force = tomllib.loads((folder / "task.toml").read_text())["contact"]["force"]
+        self.model = mujoco.MjModel.from_xml_path(str(folder / "scene.xml"))
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        self.qpos = [m.jnt_qposadr[m.joint(n).id] for n in ("x", "y", "z")]
+        self.dof_z = m.jnt_dofadr[m.joint("z").id]
+        self.act = [m.actuator(n).id for n in ("servo_x", "servo_y", "press")]
+        self.force_adr = m.sensor_adr[m.sensor("ft_force").id]
+        self.torque_adr = m.sensor_adr[m.sensor("ft_torque").id]
+        self.mocap = m.body_mocapid[m.body("part_b").id]
+        self.start_z = m.key("start").qpos[self.qpos[2]]
+
+    def contact(self, obj, xy):
+        """One contact motion at the commanded point `xy`; returns (wrench, tcp, settled)."""
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        d.mocap_pos[self.mocap] = [obj[0], obj[1], 0.0]
+        for q, v in zip(self.qpos, (xy[0], xy[1], self.start_z)):
+            d.qpos[q] = v
+        for a, v in zip(self.act, (xy[0], xy[1], -self.force)):
+            d.ctrl[a] = v
+        calm = steps = 0
+        while steps < MAX_STEPS and calm < SETTLE_STEPS:
+            mujoco.mj_step(m, d)
+            steps += 1
+            calm = calm + 1 if abs(d.qvel[self.dof_z]) < SETTLE_SPEED and d.ncon > 0 else 0
+        raw = list(d.sensordata[self.force_adr : self.force_adr + 3]) + list(d.sensordata[self.torque_adr : self.torque_adr + 3])
+        wrench = [-v for v in raw]
+        tcp = [float(d.qpos[q]) for q in self.qpos]
+        return wrench, tcp, calm >= SETTLE_STEPS
+
+
+class Estimator:
+    """One FtFusion.fmu instance through FMPy's FMU2Slave."""
+
+    def __init__(self, fmu, md, unzipdir, seed, map_path=None):
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.slave = FMU2Slave(
+            guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="fmpy"
+        )
+        self.slave.instantiate()
+        self.slave.setInteger([self.vr["seed"]], [seed])
+        if map_path:
+            self.slave.setString([self.vr["map"]], [str(Path(map_path).resolve())])
+        self.slave.setupExperiment(startTime=0.0)
+        self.slave.enterInitializationMode()
+        self.slave.exitInitializationMode()
+        self.time = 0.0
+
+    def _step(self):
+        self.slave.doStep(currentCommunicationPoint=self.time, communicationStepSize=STEP)
+        self.time += STEP
+
+    def measure(self, wrench, tcp):
+        v = self.vr
+        names = ["wrench.fx", "wrench.fy", "wrench.fz", "wrench.tx", "wrench.ty", "wrench.tz"]
+        self.slave.setReal([v[n] for n in names], wrench)
+        self.slave.setReal([v[n] for n in ("tcp.x", "tcp.y", "tcp.z", "tcp.rx", "tcp.ry", "tcp.rz")], tcp + [0.0, 0.0, 0.0])
+        self.slave.setBoolean([v["contact"]], [True])
+        self._step()
+        est = self.slave.getReal([v["object.x"], v["object.y"]])
+        self.slave.setBoolean([v["contact"]], [False])
+        self._step()
+        return est
+
+    def close(self):
+        self.slave.terminate()
+        self.slave.freeInstance()
+
+
+def run_trials(offsets, task="peg_in_hole", fmu=None, seed=1, max_contacts=30, map_path=None):
+    """Runs one closed-loop trial per true offset; returns a list of result dicts."""
+    fmu = str(fmu or ROOT / "target" / "fmu" / "FtFusion.fmu")
+    if not Path(fmu).is_file():
+        sys.exit(f"FMU {fmu} not found: build it with `cargo xtask fmu`")
+    md = read_model_description(fmu)
+    unzipdir = extract(fmu)
+    cell = Cell(task)
+    results = []
+    for i, obj in enumerate(offsets):
+        est = Estimator(fmu, md, unzipdir, seed + i, map_path)
+        target, contacts, success, tcp = [0.0, 0.0], 0, False, [0.0, 0.0, 0.0]
+        while contacts < max_contacts:
+            wrench, tcp, _settled = cell.contact(obj, target)
+            contacts += 1
+            if tcp[2] < SUCCESS_HEIGHT:
+                success = True
+                break
+            target = est.measure(wrench, tcp)
+        est.close()
+        err = ((tcp[0] - obj[0]) ** 2 + (tcp[1] - obj[1]) ** 2) ** 0.5
+        results.append({"offset": list(obj), "contacts": contacts, "success": success, "final_error": err})
+    return results
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--task", default="peg_in_hole")
+    ap.add_argument("--fmu", help="default: target/fmu/FtFusion.fmu")
+    ap.add_argument("--map", help="FT-Map for the FMU (default: its embedded peg_in_hole map)")
+    ap.add_argument("--seed", type=int, default=1, help="FMU seed of the first trial (trial i: seed + i)")
+    ap.add_argument("--offset", action="append", default=[], help="true offset x,y in m (repeatable)")
+    ap.add_argument("--offsets-csv", help="take the offsets of a harness trials.csv")
+    ap.add_argument("--max-contacts", type=int, default=30)
+    ap.add_argument("--json", action="store_true", help="print the results as JSON")
+    a = ap.parse_args()
+    offsets = [tuple(float(v) for v in o.split(",")) for o in a.offset]
+    if a.offsets_csv:
+        with open(a.offsets_csv, newline="") as f:
+            offsets += [(float(r["offset_x_m"]), float(r["offset_y_m"])) for r in csv.DictReader(f)]
+    if not offsets:
+        offsets = [(0.002, -0.0015)]
+    res = run_trials(offsets, a.task, a.fmu, a.seed, a.max_contacts, a.map)
+    if a.json:
+        print(json.dumps(res))
+    else:
+        for i, r in enumerate(res):
+            print(f"trial {i}: offset ({r['offset'][0]*1e3:+.3f}, {r['offset'][1]*1e3:+.3f}) mm: "
+                  f"{r['contacts']} contacts, {'ok' if r['success'] else 'FAILED'}, final error {r['final_error']*1e3:.3f} mm")
+
+
+if __name__ == "__main__":
+    main()
