@@ -9,6 +9,7 @@
 
 mod estimate;
 mod lookup;
+mod noise;
 mod resample;
 mod state;
 
@@ -16,7 +17,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use ftmap::FtMap;
-use rand_distr::{Distribution, StandardNormal};
+use rand_distr::Distribution;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
@@ -320,10 +321,7 @@ impl Filter {
             if top == 0.0 {
                 continue;
             }
-            for p in &mut self.pos[k * n..(k + 1) * n] {
-                let z: f32 = StandardNormal.sample(&mut self.rng);
-                *p = (*p + s * z).clamp(0.0, top);
-            }
+            noise::jitter(&mut self.rng, &mut self.pos[k * n..(k + 1) * n], s, top);
         }
     }
 }
