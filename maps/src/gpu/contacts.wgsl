@@ -1,10 +1,13 @@
 // Shifted-difference contact reduction, one workgroup per shift of B against A (the GPU
 // twin of `summarize` in cpu.rs).
 //
+// Each invocation owns whole rows of A (rows t, t + WG, ...), scanned column by column.
 // Pass 1: the minimal gap a - b over the pixels where A and the shifted B both have a
-// surface (workgroup atomicMin on an order-preserving u32 image of the f32). Pass 2: over
-// the contact pixels (gap <= min + tol) the count, the sums of column, row, A height and
-// B normal (f32, tree-reduced), and per A row the first and last contact column.
+// surface (workgroup atomicMin on an order-preserving u32 image of the f32), keeping each
+// row's minimum. Pass 2, over the rows whose minimum is a contact: over the contact pixels
+// (gap <= min + tol) the count, the sums of column, row, A height and B normal (f32,
+// tree-reduced), and per A row the first and last contact column (the caller zeroes
+// `rows`).
 // Empty pixels arrive as sentinels (A: 1e30, B: -1e30): WGSL has no infinities.
 //
 // Output per shift s: head[8 s ..] = ordered gap (0xffffffff: no overlap), count,
@@ -35,9 +38,10 @@ struct Params {
 // Per shift: B column and row of A's pixel (0, 0).
 @group(0) @binding(6) var<storage, read> offs: array<vec2<i32>>;
 @group(0) @binding(7) var<storage, read_write> head: array<u32>;
-@group(0) @binding(8) var<storage, read_write> rows: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> rows: array<u32>;
 
 const WG: u32 = 64u;
+const ROW_MINS: u32 = 32u;
 const A_EMPTY: f32 = 1e29;
 const B_EMPTY: f32 = -1e29;
 const NONE: u32 = 0xffffffffu;
@@ -77,19 +81,28 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     let cb0 = max(0, -off.x);
     let cb1 = min(i32(P.wa), i32(P.wb) - off.x) - 1;
 
+    // Each invocation owns the rows r0 + t + WG k and keeps their minima (the first
+    // ROW_MINS of them) to skip rows without contact in pass 2.
     var m = NONE;
-    for (var r = r0; r < r1; r++) {
+    var row_min: array<u32, ROW_MINS>;
+    var k = 0u;
+    for (var r = r0 + i32(t); r < r1; r += i32(WG)) {
         let span = a_span[r];
-        let c1 = min(span.y, cb1);
         let arow = r * i32(P.wa);
         let brow = (r + off.y) * i32(P.wb) + off.x;
-        for (var c = max(span.x, cb0) + i32(t); c <= c1; c += i32(WG)) {
+        var rm = NONE;
+        for (var c = max(span.x, cb0); c <= min(span.y, cb1); c++) {
             let a = a_h[arow + c];
             let b = b_h[brow + c];
             if a < A_EMPTY && b > B_EMPTY {
-                m = min(m, ordered(a - b));
+                rm = min(rm, ordered(a - b));
             }
         }
+        if k < ROW_MINS {
+            row_min[k] = rm;
+        }
+        k++;
+        m = min(m, rm);
     }
     atomicMin(&wg_min, m);
     workgroupBarrier();
@@ -106,18 +119,24 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     }
 
     let thr = unordered(gap) + P.tol;
+    let thr_ordered = ordered(thr);
     var cnt = 0u;
     var pos = vec3<f32>(0.0);
     var nrm = vec3<f32>(0.0);
     let rbase = s * 2u * P.ha;
-    for (var r = r0; r < r1; r++) {
+    k = 0u;
+    for (var r = r0 + i32(t); r < r1; r += i32(WG)) {
+        let skip = k < ROW_MINS && row_min[k] > thr_ordered;
+        k++;
+        if skip {
+            continue;
+        }
         let span = a_span[r];
-        let c1 = min(span.y, cb1);
         let arow = r * i32(P.wa);
         let brow = (r + off.y) * i32(P.wb) + off.x;
         var first = NONE;
         var last = 0u;
-        for (var c = max(span.x, cb0) + i32(t); c <= c1; c += i32(WG)) {
+        for (var c = max(span.x, cb0); c <= min(span.y, cb1); c++) {
             let a = a_h[arow + c];
             let b = b_h[brow + c];
             if a < A_EMPTY && b > B_EMPTY && a - b <= thr {
@@ -132,8 +151,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             }
         }
         if last != 0u {
-            atomicMax(&rows[rbase + 2u * u32(r)], ~first);
-            atomicMax(&rows[rbase + 2u * u32(r) + 1u], last);
+            rows[rbase + 2u * u32(r)] = ~first;
+            rows[rbase + 2u * u32(r) + 1u] = last;
         }
     }
     atomicAdd(&wg_count, cnt);
