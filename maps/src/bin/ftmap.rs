@@ -1,0 +1,344 @@
+//! `ftmap`: computes Force Torque Maps from a task's CAD meshes, and inspects, exports,
+//! plots, benchmarks and merges them.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use ftmap::depth::DepthBackend;
+use ftmap::generate::{GenerateOptions, generate, merge};
+use ftmap::{CHANNELS, FtMap, Task, UNITS, WrenchModel, cad, format, plot};
+
+#[derive(Parser)]
+#[command(name = "ftmap", version, about = "Force Torque Maps from CAD meshes by the z-buffer method")]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+/// Which depth backend computes the map.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BackendKind {
+    /// Rasterizer and contact reduction on the CPU (rayon), the reference.
+    Cpu,
+    /// wgpu render and compute pipelines (Vulkan; Mesa lavapipe without a GPU).
+    Gpu,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Computes the FT-Map of a task.
+    Generate {
+        /// Task name (a folder of models_mjcf/) or path of a task.toml.
+        #[arg(long)]
+        task: String,
+        #[arg(long, value_enum, default_value = "cpu")]
+        backend: BackendKind,
+        #[arg(long, value_enum, default_value = "centroid")]
+        model: WrenchModel,
+        /// Output map file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Compute only shard I of N (`I/N`, rotation cells split round-robin); join with `merge`.
+        #[arg(long, value_parser = parse_shard)]
+        shard: Option<[usize; 2]>,
+        /// Fail when the GPU backend finds only a CPU adapter (e.g. lavapipe).
+        #[arg(long, env = "FTMAP_REQUIRE_GPU")]
+        require_gpu: bool,
+    },
+    /// Prints a map file's header: task, model, grid, channels and their ranges.
+    Info { file: PathBuf },
+    /// Writes a map as CSV: the grid coordinates named after their DOFs, then fx..tz, depth (SI).
+    ExportCsv {
+        file: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Draws one channel over two axes as a PNG heat map.
+    Plot {
+        file: PathBuf,
+        /// fx, fy, fz, tx, ty, tz or depth.
+        #[arg(long)]
+        channel: String,
+        /// Values of the other axes, in mm and degrees, e.g. `rx=0,ry=0.5` (default 0).
+        #[arg(long, value_parser = parse_at, value_delimiter = ',')]
+        at: Vec<(String, f64)>,
+        /// The two axes to draw, e.g. `object.x,object.y` (default: the first two).
+        #[arg(long)]
+        axes: Option<String>,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Times the computation of a task's map on each backend and prints configs/s.
+    Bench {
+        #[arg(long)]
+        task: String,
+        /// Backends to time (default: both; the GPU one is skipped with a message when no adapter exists).
+        #[arg(long, value_enum)]
+        backend: Vec<BackendKind>,
+        #[arg(long, value_enum, default_value = "centroid")]
+        model: WrenchModel,
+        /// Fail when the GPU backend finds only a CPU adapter.
+        #[arg(long, env = "FTMAP_REQUIRE_GPU")]
+        require_gpu: bool,
+    },
+    /// Joins the shard files of one computation into the whole map.
+    Merge {
+        shards: Vec<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Writes (or with --check, verifies) the STL meshes of tasks from their [geometry] tables.
+    Cad {
+        /// Task name or `all`.
+        #[arg(long, default_value = "all")]
+        task: String,
+        #[arg(long)]
+        check: bool,
+    },
+}
+
+fn parse_shard(s: &str) -> Result<[usize; 2], String> {
+    let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 0/4")?;
+    let (i, n) = (i.parse::<usize>().map_err(|e| e.to_string())?, n.parse::<usize>().map_err(|e| e.to_string())?);
+    if n == 0 || i >= n {
+        return Err(format!("shard {i}/{n}: need N >= 1 and 0 <= I < N"));
+    }
+    Ok([i, n])
+}
+
+fn parse_at(s: &str) -> Result<(String, f64), String> {
+    let (k, v) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected AXIS=VALUE, e.g. rx=0"))?;
+    Ok((k.trim().to_owned(), v.trim().parse::<f64>().map_err(|e| format!("`{s}`: {e}"))?))
+}
+
+fn main() -> Result<()> {
+    match Cli::parse().cmd {
+        Cmd::Generate { task, backend, model, out, shard, require_gpu } => cmd_generate(&task, backend, model, &out, shard, require_gpu),
+        Cmd::Info { file } => cmd_info(&file),
+        Cmd::ExportCsv { file, out } => cmd_export_csv(&file, &out),
+        Cmd::Plot { file, channel, at, axes, out } => cmd_plot(&file, &channel, &at, axes.as_deref(), &out),
+        Cmd::Bench { task, backend, model, require_gpu } => cmd_bench(&task, &backend, model, require_gpu),
+        Cmd::Merge { shards, out } => cmd_merge(&shards, &out),
+        Cmd::Cad { task, check } => cmd_cad(&task, check),
+    }
+}
+
+#[cfg_attr(not(feature = "gpu"), allow(unused_variables))]
+fn make_backend(kind: BackendKind, require_gpu: bool) -> Result<Box<dyn DepthBackend>> {
+    Ok(match kind {
+        BackendKind::Cpu => Box::new(ftmap::cpu::CpuBackend),
+        #[cfg(not(feature = "gpu"))]
+        BackendKind::Gpu => bail!("this build of ftmap has no GPU backend (built without the `gpu` feature)"),
+        #[cfg(feature = "gpu")]
+        BackendKind::Gpu => {
+            let gpu = ftmap::gpu::GpuBackend::new().context("starting the GPU backend")?;
+            eprintln!("GPU adapter: {}", gpu.name());
+            if require_gpu && gpu.is_cpu_adapter() {
+                bail!("a GPU was required but the adapter found is a CPU one ({}): is the GPU's Vulkan driver (ICD) installed?", gpu.name());
+            }
+            Box::new(gpu)
+        }
+    })
+}
+
+fn cmd_generate(task: &str, kind: BackendKind, model: WrenchModel, out: &Path, shard: Option<[usize; 2]>, require_gpu: bool) -> Result<()> {
+    let task = Task::find(task)?;
+    let backend = make_backend(kind, require_gpu)?;
+    let grid = task.grid()?;
+    let total = match shard {
+        None => grid.cells() as u64,
+        Some(_) => 0,
+    };
+    let bar = ProgressBar::new(total).with_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {human_pos}/{human_len} configs, {per_sec}, eta {eta}")
+            .context("progress template")?
+            .progress_chars("=> "),
+    );
+    bar.set_message(format!("{} ({})", task.name, backend.name()));
+    let start = Instant::now();
+    let map = generate(&task, backend.as_ref(), &GenerateOptions { model, shard }, &|n| bar.inc(n))?;
+    let secs = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let done = map.data().chunks_exact(ftmap::NCH).filter(|c| !c[0].is_nan()).count();
+    format::write_bytes(&format::encode(&map, shard), out)?;
+    println!(
+        "{}: {} configs in {:.2} s = {:.0} configs/s ({}, {:?} model) -> {}",
+        task.name,
+        done,
+        secs,
+        done as f64 / secs,
+        backend.name(),
+        model,
+        out.display()
+    );
+    Ok(())
+}
+
+fn human_axis(rot: bool, v: f64) -> String {
+    if rot { format!("{:+.3}°", v.to_degrees()) } else { format!("{:+.3} mm", v * 1e3) }
+}
+
+fn cmd_info(file: &Path) -> Result<()> {
+    let (map, shard) = format::load_any(file)?;
+    let m = map.meta();
+    let g = map.grid();
+    println!("file       {} ({} bytes)", file.display(), std::fs::metadata(file)?.len());
+    if let Some([i, n]) = shard {
+        println!("shard      {i} of {n} (other cells are NaN; join with `ftmap merge`)");
+    }
+    println!("task       {}", m.task);
+    println!("model      {:?}", m.model);
+    println!("generator  {}", m.generator);
+    println!("approach   {:?}  force {} N  friction {}", m.approach, m.force, m.friction);
+    println!("sensor     {:?} m (task frame)  pixel {} mm", m.sensor_origin, m.pixel * 1e3);
+    for s in &m.sources {
+        println!("mesh {}     {} sha256 {}", s.role, s.file, s.sha256);
+    }
+    println!("grid       {} axes, {} cells", g.ndim(), g.cells());
+    for a in g.axes() {
+        let rot = a.dof.is_rotation();
+        println!(
+            "  {:<10} {} .. {} step {} ({} samples)",
+            a.dof.to_string(),
+            human_axis(rot, a.min),
+            human_axis(rot, a.max()),
+            human_axis(rot, a.step).trim_start_matches('+'),
+            a.count
+        );
+    }
+    println!("channels   {:<6} {:>12} {:>12} {:>12}", "", "min", "mean", "max");
+    for (c, (name, unit)) in CHANNELS.iter().zip(UNITS).enumerate() {
+        let vals = map.data().iter().skip(c).step_by(ftmap::NCH).copied().filter(|v| v.is_finite());
+        let (mut lo, mut hi, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
+        for v in vals {
+            let v = f64::from(v);
+            (lo, hi, sum, n) = (lo.min(v), hi.max(v), sum + v, n + 1);
+        }
+        println!("  {name:<6} {unit:<4} {lo:>12.5} {:>12.5} {hi:>12.5}", sum / n.max(1) as f64);
+    }
+    Ok(())
+}
+
+fn cmd_export_csv(file: &Path, out: &Path) -> Result<()> {
+    let map = format::load(file)?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    let mut w = csv::Writer::from_path(out).with_context(|| format!("creating {}", out.display()))?;
+    let g = map.grid();
+    let header: Vec<String> = g.axes().iter().map(|a| a.dof.to_string()).chain(CHANNELS.iter().map(|c| c.to_string())).collect();
+    w.write_record(&header)?;
+    let mut row: Vec<String> = Vec::with_capacity(header.len());
+    for cell in 0..g.cells() {
+        row.clear();
+        row.extend(g.coords(cell).iter().map(|v| format!("{v:.9}")));
+        row.extend(map.cell(cell).iter().map(|v| v.to_string()));
+        w.write_record(&row)?;
+    }
+    w.flush()?;
+    println!("{} rows -> {}", g.cells(), out.display());
+    Ok(())
+}
+
+fn cmd_plot(file: &Path, channel: &str, at: &[(String, f64)], axes: Option<&str>, out: &Path) -> Result<()> {
+    let map = format::load(file)?;
+    let g = map.grid();
+    let find = |name: &str| {
+        g.axes()
+            .iter()
+            .position(|a| a.dof.to_string() == name || a.dof.axis.name() == name)
+            .with_context(|| format!("the map has no axis `{name}`"))
+    };
+    let axes = match axes {
+        None => None,
+        Some(s) => {
+            let (x, y) = s.split_once(',').context("--axes expects two names, e.g. object.x,object.y")?;
+            Some([find(x.trim())?, find(y.trim())?])
+        }
+    };
+    // --at is given in mm and degrees: convert to SI.
+    let at_si = at
+        .iter()
+        .map(|(name, v)| Ok((name.clone(), if g.axes()[find(name)?].dof.is_rotation() { v.to_radians() } else { v * 1e-3 })))
+        .collect::<Result<Vec<_>>>()?;
+    plot::heat_map(&map, channel, axes, &at_si, out)?;
+    println!("{} -> {}", channel, out.display());
+    Ok(())
+}
+
+fn cmd_bench(task: &str, kinds: &[BackendKind], model: WrenchModel, require_gpu: bool) -> Result<()> {
+    let task = Task::find(task)?;
+    let cells = task.grid()?.cells();
+    let kinds = if kinds.is_empty() { vec![BackendKind::Cpu, BackendKind::Gpu] } else { kinds.to_vec() };
+    println!("task {}: {} configs, {:?} model", task.name, cells, model);
+    let mut reference: Option<FtMap> = None;
+    for kind in kinds {
+        let backend = match make_backend(kind, require_gpu) {
+            Ok(b) => b,
+            Err(e) if kind == BackendKind::Gpu && !require_gpu => {
+                println!("gpu: skipped: {e:#}");
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        let opts = GenerateOptions { model, shard: None };
+        // One warm-up run (GPU pipelines, page faults), then the timed one.
+        generate(&task, backend.as_ref(), &opts, &|_| ())?;
+        let start = Instant::now();
+        let map = generate(&task, backend.as_ref(), &opts, &|_| ())?;
+        let secs = start.elapsed().as_secs_f64();
+        println!("{:<40} {:>10.3} s {:>14.0} configs/s", backend.name(), secs, cells as f64 / secs);
+        match &reference {
+            None => reference = Some(map),
+            Some(r) => {
+                let max_diff = r.data().iter().zip(map.data()).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+                println!("{:<40} max |difference| to the first backend: {max_diff:.3e}", "");
+            }
+        }
+    }
+    Ok(())
+}
+
+fn cmd_merge(shards: &[PathBuf], out: &Path) -> Result<()> {
+    let parts = shards
+        .iter()
+        .map(|p| match format::load_any(p)? {
+            (m, Some(s)) => Ok((m, s)),
+            (_, None) => bail!("{} is a whole map, not a shard", p.display()),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let map = merge(parts)?;
+    format::save(&map, out)?;
+    println!("{} shards -> {}", shards.len(), out.display());
+    Ok(())
+}
+
+fn cmd_cad(task: &str, check: bool) -> Result<()> {
+    let dirs = if task == "all" {
+        cad::task_dirs_with_geometry(&ftmap::task::models_root())?
+    } else {
+        vec![Task::find(task)?.path.parent().map(Path::to_owned).unwrap_or_default()]
+    };
+    let mut stale_total = 0;
+    for dir in dirs {
+        if check {
+            let stale = cad::check_task_meshes(&dir)?;
+            for f in &stale {
+                println!("{}: {f} is stale", dir.display());
+            }
+            stale_total += stale.len();
+        } else {
+            for f in cad::write_task_meshes(&dir)? {
+                println!("wrote {}", f.display());
+            }
+        }
+    }
+    if stale_total > 0 {
+        bail!("{stale_total} mesh file(s) differ from their task's [geometry]: run `ftmap cad`");
+    }
+    Ok(())
+}

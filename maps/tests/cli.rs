@@ -1,0 +1,135 @@
+//! The `ftmap` command line as a user runs it: generate, info, export-csv, plot, shards
+//! and merge, and clear refusals of bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn ftmap(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ftmap")).args(args).output().expect("ftmap runs")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = ftmap(args);
+    assert!(out.status.success(), "ftmap {args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// A scratch folder with a small peg task (x, y in ±1 mm at 0.5 mm) using the real meshes.
+fn scratch(name: &str) -> (PathBuf, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("ftmap-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch task");
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models_mjcf/peg_in_hole");
+    let text = std::fs::read_to_string(models.join("task.toml"))
+        .expect("scratch task")
+        .replace("size_trans = 0.005", "size_trans = 0.001")
+        .replace("delta_trans = 0.0001", "delta_trans = 0.0005")
+        .replace("\"peg.stl\"", &format!("{:?}", models.join("peg.stl")))
+        .replace("\"block.stl\"", &format!("{:?}", models.join("block.stl")));
+    let task = dir.join("task.toml");
+    std::fs::write(&task, text).expect("scratch task");
+    (dir, task)
+}
+
+#[test]
+fn generate_info_export_and_plot_agree_with_each_other() {
+    let (dir, task) = scratch("main");
+    let map = dir.join("peg.ftmap");
+    let out = ok(&["generate", "--task", task.to_str().unwrap(), "--out", map.to_str().unwrap()]);
+    assert!(out.contains("configs/s"), "{out}");
+    let info = ok(&["info", map.to_str().unwrap()]);
+    assert!(info.contains("object.x") && info.contains("25 cells") && info.contains("Centroid"), "{info}");
+
+    let csv_path = dir.join("peg.csv");
+    ok(&["export-csv", map.to_str().unwrap(), "--out", csv_path.to_str().unwrap()]);
+    let mut rd = csv::Reader::from_path(&csv_path).unwrap();
+    let header: Vec<String> = rd.headers().unwrap().iter().map(str::to_owned).collect();
+    assert_eq!(header, ["object.x", "object.y", "fx", "fy", "fz", "tx", "ty", "tz", "depth"]);
+    let loaded = ftmap::format::load(&map).unwrap();
+    let mut rows = 0;
+    for rec in rd.records() {
+        let v: Vec<f64> = rec.unwrap().iter().map(|s| s.parse().unwrap()).collect();
+        let cell = loaded.nearest(&v[..2]).unwrap();
+        for (c, x) in cell.iter().zip(&v[2..]) {
+            assert_eq!(*c, *x as f32, "csv row {v:?} vs map {cell:?}");
+        }
+        rows += 1;
+    }
+    assert_eq!(rows, 25);
+
+    let png = dir.join("ty.png");
+    ok(&["plot", map.to_str().unwrap(), "--channel", "ty", "--out", png.to_str().unwrap()]);
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let bad = ftmap(&["plot", map.to_str().unwrap(), "--channel", "tq", "--out", png.to_str().unwrap()]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown channel `tq`"));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn shards_merge_into_the_whole_map() {
+    let (dir, _) = scratch("shards");
+    // Shards split the rotation cells: add rx to the small task.
+    let text = std::fs::read_to_string(dir.join("task.toml"))
+        .unwrap()
+        .replace("object = [\"x\", \"y\"]", "object = [\"x\", \"y\", \"rx\"]")
+        .replace("size_rot = 0.0", "size_rot = 0.017453292519943295");
+    let task = dir.join("task4.toml");
+    std::fs::write(&task, text).unwrap();
+    let t = task.to_str().unwrap();
+    let whole = dir.join("whole.ftmap");
+    ok(&["generate", "--task", t, "--out", whole.to_str().unwrap()]);
+    let parts: Vec<PathBuf> = (0..2).map(|i| dir.join(format!("part{i}.ftmap"))).collect();
+    for (i, p) in parts.iter().enumerate() {
+        ok(&["generate", "--task", t, "--shard", &format!("{i}/2"), "--out", p.to_str().unwrap()]);
+    }
+    // A shard is not a map: the loader says so.
+    let refused = ftmap(&["export-csv", parts[0].to_str().unwrap(), "--out", dir.join("x.csv").to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("shard 0 of 2"));
+    let merged = dir.join("merged.ftmap");
+    let mut args = vec!["merge"];
+    args.extend(parts.iter().map(|p| p.to_str().unwrap()));
+    args.extend(["--out", merged.to_str().unwrap()]);
+    ok(&args);
+    let (a, b) = (ftmap::format::load(&whole).unwrap(), ftmap::format::load(&merged).unwrap());
+    assert_eq!(a.data(), b.data());
+    let missing = ftmap(&["merge", parts[0].to_str().unwrap(), "--out", merged.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("shard 1/2 is missing"));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn bad_input_gets_an_error_that_names_the_problem() {
+    let (dir, task) = scratch("bad");
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["info".into(), dir.join("none.ftmap").display().to_string()], "No such file"),
+        (vec!["generate".into(), "--task".into(), "no_such_task".into(), "--out".into(), "x".into()], "known tasks"),
+    ];
+    for (args, expect) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = ftmap(&args);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expect), "{args:?}: {err}");
+    }
+    // A missing mesh is named.
+    let text = std::fs::read_to_string(&task).unwrap().replace("peg.stl", "gone.stl");
+    std::fs::write(&task, text).unwrap();
+    let out = ftmap(&["generate", "--task", task.to_str().unwrap(), "--out", dir.join("m.ftmap").to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("gone.stl"));
+    // A corrupted map is refused as corrupted.
+    let (dir2, task2) = scratch("bad2");
+    let map = dir2.join("m.ftmap");
+    ok(&["generate", "--task", task2.to_str().unwrap(), "--out", map.to_str().unwrap()]);
+    let mut bytes = std::fs::read(&map).unwrap();
+    let n = bytes.len();
+    bytes[n - 20] ^= 1;
+    std::fs::write(&map, &bytes).unwrap();
+    let out = ftmap(&["info", map.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("corrupted: checksum"));
+    std::fs::write(&map, &bytes[..n / 2]).unwrap();
+    let out = ftmap(&["info", map.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("truncated"));
+    std::fs::remove_dir_all(dir).ok();
+    std::fs::remove_dir_all(dir2).ok();
+}
