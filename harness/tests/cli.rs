@@ -38,3 +38,18 @@ fn another_mujoco_library_names_the_setup_script() {
     assert!(!out.status.success());
     assert!(err.contains("bash scripts/setup.sh") && err.contains("222"), "{err}");
 }
+
+#[test]
+fn a_missing_mujoco_library_names_the_setup_script() {
+    let out = harness().args(["scene", "--check"]).env("FTFUSION_MUJOCO_DIR", "/nonexistent").output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("/nonexistent/libmujoco.so.3.17.0") && err.contains("bash scripts/setup.sh"), "{err}");
+}
+
+#[test]
+fn the_launcher_finds_the_library_in_another_folder() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../.deps/mujoco");
+    let out = harness().args(["scene", "--check"]).env("FTFUSION_MUJOCO_DIR", &dir).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
