@@ -287,3 +287,35 @@ fn octagon_map_has_the_eightfold_symmetry_of_its_parts() {
     );
     assert!((a - b).abs() < 0.05 * a, "|t| at 0 deg {a}, at 45 deg {b}");
 }
+
+#[test]
+fn paper_model_gives_no_rim_torque_once_the_crescent_hull_holds_the_axis() {
+    // The crescent (peg disk outside the hole) spans more than half the peg's circle, so
+    // its convex hull contains the peg axis, exactly when the offset exceeds
+    // sqrt(R_hole^2 - r_peg^2) = 0.705 mm. The crescent's tips thin out below a pixel, so
+    // the pixel hull loses them: test clear of the critical offset by 0.5 mm above and
+    // 0.2 mm below.
+    let critical = (5.0e-3f64.powi(2) - 4.95e-3f64.powi(2)).sqrt();
+    let opts = GenerateOptions { model: WrenchModel::Paper, shard: None };
+    let map = generate(&peg_task(3e-3, 1e-4), &CpuBackend, &opts, &|_| ()).unwrap();
+    let axis = map.grid().axes()[0];
+    for i in 0..axis.count {
+        for j in 0..axis.count {
+            let (x, y) = (axis.value(i), axis.value(j));
+            let d = (x * x + y * y).sqrt();
+            let c = cell_at(&map, x, y);
+            let t = f64::from(c[3]).hypot(f64::from(c[4]));
+            if d > critical + 5e-4 {
+                assert!(t < 1e-6, "offset {d}: hull holds the axis, torque {t}");
+            } else if d > 1.5e-4 && d < critical - 2e-4 {
+                // Lever = distance from the axis to the chord between the crescent's tips,
+                // (R^2 - r^2 - d^2) / 2d; the pixel hull's trimmed tips only lengthen it.
+                let chord = (5.0e-3f64.powi(2) - 4.95e-3f64.powi(2) - d * d) / (2.0 * d);
+                assert!(t / F > chord - 5e-5, "offset {d}: lever {} mm, chord at {} mm", t / F * 1e3, chord * 1e3);
+                // Along z x offset, within the pixel hull's ragged edge (cos > 0.9).
+                let along = (-y * f64::from(c[3]) + x * f64::from(c[4])) / (t * d);
+                assert!(along > 0.9, "offset ({x}, {y}): torque {:?} not along z x offset", &c[3..5]);
+            }
+        }
+    }
+}
