@@ -106,13 +106,15 @@ impl Agreement {
     /// A readable table.
     pub fn table(&self) -> String {
         let mut s = format!("  {:<7} {:>7} {:>14} {:>12} {:>12}\n", "channel", "cells", "sign agreement", "correlation", "RMS diff");
+        // NaN: a channel without signs (all zero in a map) or without spread: say so.
+        let or_na = |v: f64, text: String| if v.is_nan() { "n/a".to_owned() } else { text };
         for c in &self.channels {
             s += &format!(
-                "  {:<7} {:>7} {:>13.1}% {:>12.3} {:>12.4}\n",
+                "  {:<7} {:>7} {:>14} {:>12} {:>12.4}\n",
                 c.name,
                 c.cells,
-                100.0 * c.sign_agreement,
-                c.correlation,
+                or_na(c.sign_agreement, format!("{:.1}%", 100.0 * c.sign_agreement)),
+                or_na(c.correlation, format!("{:.3}", c.correlation)),
                 c.rms
             );
         }
