@@ -64,8 +64,26 @@ impl DepthBackend for CpuBackend {
         shifts: &[Shift],
         tolerance: f32,
     ) -> Result<Vec<ContactSummary>> {
-        let rows = Rows { spans: RowSpans::of(a), flat: flat_rows(a), normals: Normals::of(b, b_normals) };
-        Ok(shifts.par_iter().map_init(Vec::new, |scratch, s| summarize(a, b, &rows, *s, tolerance, scratch)).collect())
+        let rows = Rows { spans: RowSpans::of(a), flat: flat_rows(a), solid: solid_rows(a), normals: Normals::of(b, b_normals) };
+        // Shifts of one row offset share B's rows: batch them so that the sliding maxima of
+        // B's rows are computed once per batch.
+        let mut order: Vec<usize> = (0..shifts.len()).collect();
+        order.sort_by_key(|&k| (shifts[k].dv, shifts[k].du));
+        let batches: Vec<&[usize]> =
+            order.chunk_by(|&x, &y| shifts[x].dv == shifts[y].dv).flat_map(|g| g.chunks(BATCH)).collect();
+        let done: Vec<Vec<(usize, ContactSummary)>> = batches
+            .par_iter()
+            .map(|batch| {
+                let maxima = RowMaxima::new(a, b, &rows.solid, shifts[batch[0]].dv);
+                let mut scratch = Vec::new();
+                batch.iter().map(|&k| (k, summarize(a, b, &rows, &maxima, shifts[k], tolerance, &mut scratch))).collect()
+            })
+            .collect();
+        let mut out: Vec<Option<ContactSummary>> = vec![None; shifts.len()];
+        for (k, summary) in done.into_iter().flatten() {
+            out[k] = Some(summary);
+        }
+        Ok(out.into_iter().map(|s| s.expect("every shift is in one batch")).collect())
     }
 }
 
@@ -246,29 +264,132 @@ fn flat_rows(a: &DepthImage) -> Vec<Option<f32>> {
         .collect()
 }
 
+/// A row of A whose surface is one unbroken run at one height.
+#[derive(Clone, Copy)]
+struct Solid {
+    height: f32,
+    first: usize,
+    len: usize,
+}
+
+/// Per row of A's image, its run when it is [`Solid`].
+fn solid_rows(a: &DepthImage) -> Vec<Option<Solid>> {
+    a.height
+        .chunks_exact(a.window.width)
+        .map(|row| {
+            let first = row.iter().position(|h| h.is_finite())?;
+            let last = row.iter().rposition(|h| h.is_finite())?;
+            let run = &row[first..=last];
+            run.iter().all(|&h| h == run[0]).then_some(Solid { height: run[0], first, len: run.len() })
+        })
+        .collect()
+}
+
+/// Shifts per batch that share the sliding maxima of B's rows.
+const BATCH: usize = 128;
+
+/// For one row offset of B against A: per solid row of A, the maximum of B's row over
+/// every window of the run's length (indexed by the window's first B column). Then the
+/// minimal gap of that row under a shift is the run's height minus one lookup; floats
+/// keep it exact, since h - b decreases monotonically in b.
+struct RowMaxima {
+    /// All rows' maxima, one after the other.
+    values: Vec<f32>,
+    /// Per A row, the range of `values` holding its maxima (empty when not solid).
+    ranges: Vec<std::ops::Range<usize>>,
+}
+
+impl RowMaxima {
+    fn new(a: &DepthImage, b: &DepthImage, solid: &[Option<Solid>], dv: i64) -> Self {
+        let bw = b.window.width;
+        let off_row = a.window.j0 - dv - b.window.j0;
+        let mut values = Vec::with_capacity(solid.len() * bw);
+        let mut prefix = Vec::with_capacity(bw);
+        let ranges = solid
+            .iter()
+            .enumerate()
+            .map(|(r, s)| {
+                let start = values.len();
+                let row = s.and_then(|s| {
+                    let br = usize::try_from(r as i64 + off_row).ok().filter(|&br| br < b.window.height)?;
+                    Some((s.len, &b.height[br * bw..(br + 1) * bw]))
+                });
+                if let Some((len, row)) = row {
+                    sliding_max(row, len, &mut prefix, &mut values);
+                }
+                start..values.len()
+            })
+            .collect();
+        Self { values, ranges }
+    }
+
+    /// The minimal gap of solid row `r` whose run starts at B column `bcol`, if known.
+    fn row_min(&self, solid: Option<Solid>, r: usize, bcol: i64) -> Option<f32> {
+        let s = solid?;
+        let at = usize::try_from(bcol).ok()?;
+        self.values[self.ranges[r].clone()].get(at).map(|m| s.height - m)
+    }
+}
+
+/// Appends to `out`, for every window `x[i..i + len]` inside `x`, its maximum (van Herk /
+/// Gil-Werman: running maxima forwards and backwards within blocks of `len`); `prefix`
+/// is scratch space.
+fn sliding_max(x: &[f32], len: usize, prefix: &mut Vec<f32>, out: &mut Vec<f32>) {
+    let n = x.len();
+    if len == 0 || len > n {
+        return;
+    }
+    prefix.clear();
+    prefix.extend_from_slice(x);
+    let base = out.len();
+    out.extend_from_slice(x);
+    let suffix = &mut out[base..];
+    for start in (0..n).step_by(len) {
+        let end = (start + len).min(n);
+        for i in start + 1..end {
+            prefix[i] = prefix[i].max(prefix[i - 1]);
+        }
+        for i in (start..end - 1).rev() {
+            suffix[i] = suffix[i].max(suffix[i + 1]);
+        }
+    }
+    for i in 0..=n - len {
+        suffix[i] = suffix[i].max(prefix[i + len - 1]);
+    }
+    out.truncate(base + n - len + 1);
+}
+
 /// What the contact reduction precomputes once per image pair.
 struct Rows {
     spans: RowSpans,
     flat: Vec<Option<f32>>,
+    solid: Vec<Option<Solid>>,
     normals: Normals,
 }
 
-/// The contact summary of one shift; `scratch` is a per-thread buffer for row minima.
+/// The contact summary of one shift; `maxima` serve its solid rows, `scratch` holds the
+/// row minima.
 fn summarize(
     a: &DepthImage,
     b: &DepthImage,
     rows: &Rows,
+    maxima: &RowMaxima,
     s: Shift,
     tol: f32,
     scratch: &mut Vec<(RowPair, f32)>,
 ) -> ContactSummary {
     let (w, spans, bn) = (a.window.width, &rows.spans, &rows.normals.comp);
+    let off_col = a.window.i0 - s.du - b.window.i0;
     let mut gap = f32::INFINITY;
     let row_min = scratch;
     row_min.clear();
     for p in row_pairs(a, b, spans, s) {
         let n = p.c1 - p.c0 + 1;
-        let m = min_diff(&a.height[p.r * w + p.c0..][..n], &b.height[p.brow_start..][..n]);
+        let solid = rows.solid[p.r];
+        let m = match maxima.row_min(solid, p.r, solid.map_or(-1, |sd| sd.first as i64 + off_col)) {
+            Some(m) => m,
+            None => min_diff(&a.height[p.r * w + p.c0..][..n], &b.height[p.brow_start..][..n]),
+        };
         gap = gap.min(m);
         row_min.push((p, m));
     }
@@ -316,4 +437,29 @@ fn summarize(
         out.rows.push((p.r as u32, r.first as u32, r.last as u32));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sliding_max_equals_the_direct_maximum_of_every_window() {
+        let x: Vec<f32> = (0..37).map(|i| ((i * 7919) % 23) as f32 - if i % 5 == 0 { f32::INFINITY } else { 0.0 }).collect();
+        let mut prefix = Vec::new();
+        for len in 1..=x.len() {
+            let mut fast = vec![-1.0];
+            sliding_max(&x, len, &mut prefix, &mut fast);
+            assert_eq!(fast.remove(0), -1.0, "appends after what is there");
+            assert_eq!(fast.len(), x.len() - len + 1);
+            for (i, m) in fast.iter().enumerate() {
+                let direct = x[i..i + len].iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                assert_eq!(*m, direct, "window {i}..{} ", i + len);
+            }
+        }
+        let mut none = Vec::new();
+        sliding_max(&x, 0, &mut prefix, &mut none);
+        sliding_max(&x, 38, &mut prefix, &mut none);
+        assert!(none.is_empty());
+    }
 }
