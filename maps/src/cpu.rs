@@ -22,21 +22,49 @@ impl DepthBackend for CpuBackend {
         for t in 0..job.mesh.faces.len() {
             let p = job.mesh.triangle(t).map(|q| {
                 let c = job.view.project(&(job.pose * q));
-                [c[0] / job.pixel - job.window.i0 as f64, c[1] / job.pixel - job.window.j0 as f64, c[2]]
+                [
+                    c[0] / job.pixel - job.window.i0 as f64,
+                    c[1] / job.pixel - job.window.j0 as f64,
+                    c[2],
+                ]
             });
             let area = edge(p[0], p[1], p[2]);
             if area.abs() < 1e-9 {
                 continue; // edge-on: invisible along the view
             }
-            let xmin = p.iter().map(|q| q[0]).fold(f64::INFINITY, f64::min).ceil().max(0.0) as i64;
-            let xmax = (p.iter().map(|q| q[0]).fold(f64::NEG_INFINITY, f64::max).floor() as i64).min(w - 1);
-            let ymin = p.iter().map(|q| q[1]).fold(f64::INFINITY, f64::min).ceil().max(0.0) as i64;
-            let ymax = (p.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max).floor() as i64).min(h - 1);
+            let xmin = p
+                .iter()
+                .map(|q| q[0])
+                .fold(f64::INFINITY, f64::min)
+                .ceil()
+                .max(0.0) as i64;
+            let xmax = (p
+                .iter()
+                .map(|q| q[0])
+                .fold(f64::NEG_INFINITY, f64::max)
+                .floor() as i64)
+                .min(w - 1);
+            let ymin = p
+                .iter()
+                .map(|q| q[1])
+                .fold(f64::INFINITY, f64::min)
+                .ceil()
+                .max(0.0) as i64;
+            let ymax = (p
+                .iter()
+                .map(|q| q[1])
+                .fold(f64::NEG_INFINITY, f64::max)
+                .floor() as i64)
+                .min(h - 1);
             let eps = -1e-9 * area.abs();
             for y in ymin..=ymax {
                 for x in xmin..=xmax {
                     let q = [x as f64, y as f64, 0.0];
-                    let (b0, b1, b2) = (edge(p[1], p[2], q) / area, edge(p[2], p[0], q) / area, edge(p[0], p[1], q) / area);
+                    let (b0, b1, b2) = (
+                        edge(p[1], p[2], q) / area,
+                        edge(p[2], p[0], q) / area,
+                        edge(p[0], p[1], q) / area,
+                    );
                     if b0 * area.abs() < eps || b1 * area.abs() < eps || b2 * area.abs() < eps {
                         continue;
                     }
@@ -64,26 +92,44 @@ impl DepthBackend for CpuBackend {
         shifts: &[Shift],
         tolerance: f32,
     ) -> Result<Vec<ContactSummary>> {
-        let rows = Rows { spans: RowSpans::of(a), flat: flat_rows(a), solid: solid_rows(a), normals: Normals::of(b, b_normals) };
+        let rows = Rows {
+            spans: RowSpans::of(a),
+            flat: flat_rows(a),
+            solid: solid_rows(a),
+            normals: Normals::of(b, b_normals),
+        };
         // Shifts of one row offset share B's rows: batch them so that the sliding maxima of
         // B's rows are computed once per batch.
         let mut order: Vec<usize> = (0..shifts.len()).collect();
         order.sort_by_key(|&k| (shifts[k].dv, shifts[k].du));
-        let batches: Vec<&[usize]> =
-            order.chunk_by(|&x, &y| shifts[x].dv == shifts[y].dv).flat_map(|g| g.chunks(BATCH)).collect();
+        let batches: Vec<&[usize]> = order
+            .chunk_by(|&x, &y| shifts[x].dv == shifts[y].dv)
+            .flat_map(|g| g.chunks(BATCH))
+            .collect();
         let done: Vec<Vec<(usize, ContactSummary)>> = batches
             .par_iter()
             .map(|batch| {
                 let maxima = RowMaxima::new(a, b, &rows.solid, shifts[batch[0]].dv);
                 let mut scratch = Vec::new();
-                batch.iter().map(|&k| (k, summarize(a, b, &rows, &maxima, shifts[k], tolerance, &mut scratch))).collect()
+                batch
+                    .iter()
+                    .map(|&k| {
+                        (
+                            k,
+                            summarize(a, b, &rows, &maxima, shifts[k], tolerance, &mut scratch),
+                        )
+                    })
+                    .collect()
             })
             .collect();
         let mut out: Vec<Option<ContactSummary>> = vec![None; shifts.len()];
         for (k, summary) in done.into_iter().flatten() {
             out[k] = Some(summary);
         }
-        Ok(out.into_iter().map(|s| s.expect("every shift is in one batch")).collect())
+        Ok(out
+            .into_iter()
+            .map(|s| s.expect("every shift is in one batch"))
+            .collect())
     }
 }
 
@@ -127,7 +173,12 @@ struct RowPair {
     brow_start: usize,
 }
 
-fn row_pairs<'s>(a: &'s DepthImage, b: &'s DepthImage, spans: &'s RowSpans, s: Shift) -> impl Iterator<Item = RowPair> + 's {
+fn row_pairs<'s>(
+    a: &'s DepthImage,
+    b: &'s DepthImage,
+    spans: &'s RowSpans,
+    s: Shift,
+) -> impl Iterator<Item = RowPair> + 's {
     let off_col = a.window.i0 - s.du - b.window.i0;
     let off_row = a.window.j0 - s.dv - b.window.j0;
     spans.0.iter().enumerate().filter_map(move |(r, span)| {
@@ -142,7 +193,12 @@ fn row_pairs<'s>(a: &'s DepthImage, b: &'s DepthImage, spans: &'s RowSpans, s: S
         if c1 < c0 as i64 {
             return None;
         }
-        Some(RowPair { r, c0, c1: c1 as usize, brow_start: (br as usize) * b.window.width + (c0 as i64 + off_col) as usize })
+        Some(RowPair {
+            r,
+            c0,
+            c1: c1 as usize,
+            brow_start: (br as usize) * b.window.width + (c0 as i64 + off_col) as usize,
+        })
     })
 }
 
@@ -179,7 +235,13 @@ struct RowSums {
 /// Masks are applied bitwise, so empty pixels (infinite heights) never make a NaN.
 /// Without `SUMS` the height and normal sums are left 0 (the caller knows them: flat A
 /// row, one B normal).
-fn row_sums<const SUMS: bool>(a: &[f32], b: &[f32], n: [&[f32]; 3], thr: f32, col0: f32) -> RowSums {
+fn row_sums<const SUMS: bool>(
+    a: &[f32],
+    b: &[f32],
+    n: [&[f32]; 3],
+    thr: f32,
+    col0: f32,
+) -> RowSums {
     let full = a.len() - a.len() % 8;
     let (thr8, one, zero) = (f32x8::splat(thr), f32x8::splat(1.0), f32x8::ZERO);
     let (mut cnt, mut sc, mut sh) = (zero, zero, zero);
@@ -239,16 +301,26 @@ struct Normals {
 
 impl Normals {
     fn of(b: &DepthImage, bn: &[[f32; 3]]) -> Self {
-        let comp = |c: usize| b.tri.iter().map(|&t| bn.get(t as usize).map_or(0.0, |n| n[c])).collect();
+        let comp = |c: usize| {
+            b.tri
+                .iter()
+                .map(|&t| bn.get(t as usize).map_or(0.0, |n| n[c]))
+                .collect()
+        };
         let w = b.window.width;
         let row_uniform = (0..b.window.height)
             .map(|r| {
-                let mut seen = b.tri[r * w..(r + 1) * w].iter().filter_map(|&t| bn.get(t as usize));
+                let mut seen = b.tri[r * w..(r + 1) * w]
+                    .iter()
+                    .filter_map(|&t| bn.get(t as usize));
                 let first = *seen.next().unwrap_or(&[0.0; 3]);
                 seen.all(|n| *n == first).then_some(first)
             })
             .collect();
-        Self { comp: [comp(0), comp(1), comp(2)], row_uniform }
+        Self {
+            comp: [comp(0), comp(1), comp(2)],
+            row_uniform,
+        }
     }
 }
 
@@ -280,7 +352,11 @@ fn solid_rows(a: &DepthImage) -> Vec<Option<Solid>> {
             let first = row.iter().position(|h| h.is_finite())?;
             let last = row.iter().rposition(|h| h.is_finite())?;
             let run = &row[first..=last];
-            run.iter().all(|&h| h == run[0]).then_some(Solid { height: run[0], first, len: run.len() })
+            run.iter().all(|&h| h == run[0]).then_some(Solid {
+                height: run[0],
+                first,
+                len: run.len(),
+            })
         })
         .collect()
 }
@@ -311,7 +387,9 @@ impl RowMaxima {
             .map(|(r, s)| {
                 let start = values.len();
                 let row = s.and_then(|s| {
-                    let br = usize::try_from(r as i64 + off_row).ok().filter(|&br| br < b.window.height)?;
+                    let br = usize::try_from(r as i64 + off_row)
+                        .ok()
+                        .filter(|&br| br < b.window.height)?;
                     Some((s.len, &b.height[br * bw..(br + 1) * bw]))
                 });
                 if let Some((len, row)) = row {
@@ -327,7 +405,9 @@ impl RowMaxima {
     fn row_min(&self, solid: Option<Solid>, r: usize, bcol: i64) -> Option<f32> {
         let s = solid?;
         let at = usize::try_from(bcol).ok()?;
-        self.values[self.ranges[r].clone()].get(at).map(|m| s.height - m)
+        self.values[self.ranges[r].clone()]
+            .get(at)
+            .map(|m| s.height - m)
     }
 }
 
@@ -388,7 +468,10 @@ fn summarize(
         let solid = rows.solid[p.r];
         let m = match maxima.row_min(solid, p.r, solid.map_or(-1, |sd| sd.first as i64 + off_col)) {
             Some(m) => m,
-            None => min_diff(&a.height[p.r * w + p.c0..][..n], &b.height[p.brow_start..][..n]),
+            None => min_diff(
+                &a.height[p.r * w + p.c0..][..n],
+                &b.height[p.brow_start..][..n],
+            ),
         };
         gap = gap.min(m);
         row_min.push((p, m));
@@ -414,7 +497,10 @@ fn summarize(
         let bs = p.brow_start;
         let (av, bv) = (&a.height[p.r * w + p.c0..][..n], &b.height[bs..bs + n]);
         let nv = [&bn[0][bs..bs + n], &bn[1][bs..bs + n], &bn[2][bs..bs + n]];
-        let uniform = (rows.flat[p.r], rows.normals.row_uniform[bs / b.window.width]);
+        let uniform = (
+            rows.flat[p.r],
+            rows.normals.row_uniform[bs / b.window.width],
+        );
         let r = match uniform {
             (Some(h), Some(normal)) => {
                 let mut r = row_sums::<false>(av, bv, nv, thr, p.c0 as f32);
@@ -445,7 +531,9 @@ mod tests {
 
     #[test]
     fn sliding_max_equals_the_direct_maximum_of_every_window() {
-        let x: Vec<f32> = (0..37).map(|i| ((i * 7919) % 23) as f32 - if i % 5 == 0 { f32::INFINITY } else { 0.0 }).collect();
+        let x: Vec<f32> = (0..37)
+            .map(|i| ((i * 7919) % 23) as f32 - if i % 5 == 0 { f32::INFINITY } else { 0.0 })
+            .collect();
         let mut prefix = Vec::new();
         for len in 1..=x.len() {
             let mut fast = vec![-1.0];
@@ -453,7 +541,10 @@ mod tests {
             assert_eq!(fast.remove(0), -1.0, "appends after what is there");
             assert_eq!(fast.len(), x.len() - len + 1);
             for (i, m) in fast.iter().enumerate() {
-                let direct = x[i..i + len].iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                let direct = x[i..i + len]
+                    .iter()
+                    .copied()
+                    .fold(f32::NEG_INFINITY, f32::max);
                 assert_eq!(*m, direct, "window {i}..{} ", i + len);
             }
         }

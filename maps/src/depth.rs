@@ -28,7 +28,11 @@ impl View {
     /// when a is near x), v = w x u.
     pub fn along(a: Vector3<f64>) -> Self {
         let w = -a.normalize();
-        let seed = if w.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let seed = if w.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
         let u = (seed - w * seed.dot(&w)).normalize();
         let v = w.cross(&u);
         Self { u, v, w }
@@ -36,7 +40,11 @@ impl View {
 
     /// (u, v, w) coordinates of a point.
     pub fn project(&self, p: &Point3<f64>) -> [f64; 3] {
-        [p.coords.dot(&self.u), p.coords.dot(&self.v), p.coords.dot(&self.w)]
+        [
+            p.coords.dot(&self.u),
+            p.coords.dot(&self.v),
+            p.coords.dot(&self.w),
+        ]
     }
 
     /// The point with view coordinates (u, v, w).
@@ -75,7 +83,12 @@ impl PixelWindow {
         let i1 = (umax / pixel).floor() as i64 + margin;
         let j0 = (vmin / pixel).ceil() as i64 - margin;
         let j1 = (vmax / pixel).floor() as i64 + margin;
-        Self { i0, j0, width: (i1 - i0 + 1).max(0) as usize, height: (j1 - j0 + 1).max(0) as usize }
+        Self {
+            i0,
+            j0,
+            width: (i1 - i0 + 1).max(0) as usize,
+            height: (j1 - j0 + 1).max(0) as usize,
+        }
     }
 
     /// Number of pixels.
@@ -126,7 +139,12 @@ impl DepthImage {
             Surface::Top => EMPTY_B,
             Surface::Bottom => EMPTY_A,
         };
-        Self { window, pixel, height: vec![fill; window.len()], tri: vec![u32::MAX; window.len()] }
+        Self {
+            window,
+            pixel,
+            height: vec![fill; window.len()],
+            tri: vec![u32::MAX; window.len()],
+        }
     }
 
     /// Number of pixels with a surface.

@@ -78,7 +78,10 @@ pub fn save(map: &FtMap, path: &Path) -> Result<()> {
 
 /// Writes bytes to `path` through a temporary file beside it.
 pub fn write_bytes(bytes: &[u8], path: &Path) -> Result<()> {
-    let io = |source| MapError::Io { path: path.to_owned(), source };
+    let io = |source| MapError::Io {
+        path: path.to_owned(),
+        source,
+    };
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io)?;
     }
@@ -90,7 +93,10 @@ pub fn write_bytes(bytes: &[u8], path: &Path) -> Result<()> {
 /// Reads a complete map file, refusing foreign, truncated, corrupted, wrong-version and
 /// shard files.
 pub fn load(path: &Path) -> Result<FtMap> {
-    let bytes = std::fs::read(path).map_err(|source| MapError::Io { path: path.to_owned(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| MapError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
     from_bytes(&bytes, path)
 }
 
@@ -100,14 +106,19 @@ pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<FtMap> {
         (map, None) => Ok(map),
         (_, Some([i, n])) => Err(MapError::BadHeader {
             path: path.to_owned(),
-            reason: format!("this is shard {i} of {n}, not a whole map: merge the shards first (`ftmap merge`)"),
+            reason: format!(
+                "this is shard {i} of {n}, not a whole map: merge the shards first (`ftmap merge`)"
+            ),
         }),
     }
 }
 
 /// Reads a map or shard file: the map and, for a shard, `[i, n]`.
 pub fn load_any(path: &Path) -> Result<(FtMap, Option<[usize; 2]>)> {
-    let bytes = std::fs::read(path).map_err(|source| MapError::Io { path: path.to_owned(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| MapError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
     decode(&bytes, path)
 }
 
@@ -125,18 +136,30 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<(FtMap, Option<[usize; 2]>)> 
         if MAGIC.starts_with(head) {
             return Err(truncated("the magic bytes", MAGIC.len()));
         }
-        return Err(MapError::NotAMap { path: p(), found: head.to_vec(), expected: MAGIC.to_vec() });
+        return Err(MapError::NotAMap {
+            path: p(),
+            found: head.to_vec(),
+            expected: MAGIC.to_vec(),
+        });
     }
     let u32_at = |at: usize| -> Result<u32> {
-        let b = bytes.get(at..at + 4).ok_or_else(|| truncated("the fixed header", at + 4))?;
+        let b = bytes
+            .get(at..at + 4)
+            .ok_or_else(|| truncated("the fixed header", at + 4))?;
         Ok(u32::from_le_bytes(b.try_into().expect("4 bytes")))
     };
     let version = u32_at(8)?;
     if version != VERSION {
-        return Err(MapError::UnsupportedVersion { path: p(), found: version, supported: VERSION });
+        return Err(MapError::UnsupportedVersion {
+            path: p(),
+            found: version,
+            supported: VERSION,
+        });
     }
     let hlen = u32_at(12)? as usize;
-    let json = bytes.get(16..16 + hlen).ok_or_else(|| truncated("the header", 16 + hlen))?;
+    let json = bytes
+        .get(16..16 + hlen)
+        .ok_or_else(|| truncated("the header", 16 + hlen))?;
     let bad = |reason: String| MapError::BadHeader { path: p(), reason };
     let header: Header = serde_json::from_slice(json).map_err(|e| bad(e.to_string()))?;
     if header.kind != KIND {
@@ -154,12 +177,19 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<(FtMap, Option<[usize; 2]>)> 
         return Err(truncated("the data and checksum", total));
     }
     if bytes.len() > total {
-        return Err(bad(format!("{} bytes after the checksum", bytes.len() - total)));
+        return Err(bad(format!(
+            "{} bytes after the checksum",
+            bytes.len() - total
+        )));
     }
     let stored = u32::from_le_bytes(bytes[total - 4..].try_into().expect("4 bytes"));
     let computed = crc32fast::hash(&bytes[..total - 4]);
     if stored != computed {
-        return Err(MapError::Checksum { path: p(), stored, computed });
+        return Err(MapError::Checksum {
+            path: p(),
+            stored,
+            computed,
+        });
     }
     let data = bytes[data_at..total - 4]
         .chunks_exact(4)
@@ -214,7 +244,17 @@ mod tests {
         let mut bytes = to_bytes(&sample_map());
         bytes[8] = 2;
         let e = roundtrip_err(&bytes);
-        assert!(matches!(e, MapError::UnsupportedVersion { found: 2, supported: 1, .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                MapError::UnsupportedVersion {
+                    found: 2,
+                    supported: 1,
+                    ..
+                }
+            ),
+            "{e}"
+        );
         let mut extra = to_bytes(&sample_map());
         extra.push(0);
         assert!(matches!(roundtrip_err(&extra), MapError::BadHeader { .. }));
@@ -223,7 +263,10 @@ mod tests {
     #[test]
     fn a_header_of_another_kind_is_refused() {
         let mut bytes = to_bytes(&sample_map());
-        let at = bytes.windows(14).position(|w| w == b"\"kind\":\"ftmap\"").expect("kind in header");
+        let at = bytes
+            .windows(14)
+            .position(|w| w == b"\"kind\":\"ftmap\"")
+            .expect("kind in header");
         bytes[at + 11] = b'o';
         let e = roundtrip_err(&bytes);
         assert!(e.to_string().contains("kind is `ftmop`"), "{e}");

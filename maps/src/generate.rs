@@ -28,7 +28,10 @@ pub struct GenerateOptions {
 
 impl Default for GenerateOptions {
     fn default() -> Self {
-        Self { model: WrenchModel::Centroid, shard: None }
+        Self {
+            model: WrenchModel::Centroid,
+            shard: None,
+        }
     }
 }
 
@@ -60,8 +63,9 @@ struct SubGrid {
 
 impl SubGrid {
     fn new(grid: &Grid, pick: impl Fn(Role) -> bool) -> Self {
-        let axes: Vec<usize> =
-            (0..grid.ndim()).filter(|&k| pick(role(grid.axes()[k].dof.pose, grid.axes()[k].dof.axis))).collect();
+        let axes: Vec<usize> = (0..grid.ndim())
+            .filter(|&k| pick(role(grid.axes()[k].dof.pose, grid.axes()[k].dof.axis)))
+            .collect();
         let counts: Vec<usize> = axes.iter().map(|&k| grid.axes()[k].count).collect();
         let len = counts.iter().product();
         Self { axes, counts, len }
@@ -121,27 +125,42 @@ pub fn generate_with(
         friction: task.contact.friction,
         sensor_origin: task.contact.sensor_origin,
         pixel: task.depth.pixel,
-        sources: [("A", mesh_a, &task.part_a.mesh), ("B", mesh_b, &task.part_b.mesh)]
-            .into_iter()
-            .map(|(role, m, p)| SourceMesh {
-                role: role.into(),
-                file: p.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
-                sha256: m.sha256.clone(),
-            })
-            .collect(),
+        sources: [
+            ("A", mesh_a, &task.part_a.mesh),
+            ("B", mesh_b, &task.part_b.mesh),
+        ]
+        .into_iter()
+        .map(|(role, m, p)| SourceMesh {
+            role: role.into(),
+            file: p
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            sha256: m.sha256.clone(),
+        })
+        .collect(),
         generator: format!("ftmap {} ({})", env!("CARGO_PKG_VERSION"), backend.name()),
     };
     let mut map = FtMap::zeros(grid.clone(), meta);
     if let Some([i, n]) = opts.shard {
         if n == 0 || i >= n {
-            return Err(MapError::Grid(format!("shard {i}/{n}: need n >= 1 and 0 <= i < n")));
+            return Err(MapError::Grid(format!(
+                "shard {i}/{n}: need n >= 1 and 0 <= i < n"
+            )));
         }
         map.data_mut().fill(f32::NAN);
     }
     let render_axes = SubGrid::new(&grid, |r| r == Role::Render);
     let other_axes = SubGrid::new(&grid, |r| r != Role::Render);
     let [shard_i, shard_n] = opts.shard.unwrap_or([0, 1]);
-    let ctx = Context { task, backend, grid: &grid, mesh_a, mesh_b, model: opts.model };
+    let ctx = Context {
+        task,
+        backend,
+        grid: &grid,
+        mesh_a,
+        mesh_b,
+        model: opts.model,
+    };
     for rot_cell in (0..render_axes.len).filter(|r| r % shard_n == shard_i) {
         let mut idx = [0usize; MAX_AXES];
         render_axes.fill(rot_cell, &mut idx);
@@ -185,7 +204,10 @@ impl Context<'_> {
                 others.fill(k, &mut idx);
                 let v = pose_values(self.grid, &idx);
                 let [tu, tv, tw] = view.project(&Point3::new(v[6], v[7], v[8]));
-                let shift = Shift { du: (tu / pixel).round() as i64, dv: (tv / pixel).round() as i64 };
+                let shift = Shift {
+                    du: (tu / pixel).round() as i64,
+                    dv: (tv / pixel).round() as i64,
+                };
                 (idx, shift, tw, Vector3::new(v[0], v[1], v[2]))
             })
             .collect();
@@ -196,7 +218,12 @@ impl Context<'_> {
         let reach_v = shifts.iter().map(|s| s.dv.abs()).max().unwrap_or(0);
 
         let bounds = |m: &Mesh, iso: &Isometry3<f64>| {
-            let mut b = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+            let mut b = [
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ];
             for p in &m.vertices {
                 let [u, v, _] = view.project(&(iso * p));
                 b = [b[0].min(u), b[1].max(u), b[2].min(v), b[3].max(v)];
@@ -204,7 +231,10 @@ impl Context<'_> {
             b
         };
         let a_pose = Isometry3::identity();
-        let b_pose = Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_rotation_matrix(&r2));
+        let b_pose = Isometry3::from_parts(
+            Translation3::identity(),
+            UnitQuaternion::from_rotation_matrix(&r2),
+        );
         let [u0, u1, v0, v1] = bounds(self.mesh_a, &a_pose);
         let mut a_win = PixelWindow::covering(u0, u1, v0, v1, pixel, 1);
         a_win.width = a_win.width.next_multiple_of(8); // whole vector lanes per row
@@ -214,16 +244,37 @@ impl Context<'_> {
             width: a_win.width + 2 * reach_u as usize,
             height: a_win.height + 2 * reach_v as usize,
         };
-        let job = |mesh, pose, surface, window| RenderJob { mesh, pose, view, surface, window, pixel };
-        let a_img = self.backend.render(&job(self.mesh_a, a_pose, Surface::Bottom, a_win))?;
-        let b_img = self.backend.render(&job(self.mesh_b, b_pose, Surface::Top, b_win))?;
+        let job = |mesh, pose, surface, window| RenderJob {
+            mesh,
+            pose,
+            view,
+            surface,
+            window,
+            pixel,
+        };
+        let a_img = self
+            .backend
+            .render(&job(self.mesh_a, a_pose, Surface::Bottom, a_win))?;
+        let b_img = self
+            .backend
+            .render(&job(self.mesh_b, b_pose, Surface::Top, b_win))?;
         let b_normals: Vec<[f32; 3]> = (0..self.mesh_b.faces.len())
             .map(|t| {
                 let n = r2 * self.mesh_b.normal(t);
-                [n.dot(&view.u) as f32, n.dot(&view.v) as f32, n.dot(&view.w) as f32]
+                [
+                    n.dot(&view.u) as f32,
+                    n.dot(&view.v) as f32,
+                    n.dot(&view.w) as f32,
+                ]
             })
             .collect();
-        let summaries = self.backend.contacts(&a_img, &b_img, &b_normals, &shifts, self.task.depth.tolerance as f32)?;
+        let summaries = self.backend.contacts(
+            &a_img,
+            &b_img,
+            &b_normals,
+            &shifts,
+            self.task.depth.tolerance as f32,
+        )?;
 
         let setup = WrenchSetup {
             view,
@@ -236,7 +287,9 @@ impl Context<'_> {
         let out = cells
             .par_iter()
             .map(|(idx, shift, tw, t1)| {
-                let k = shifts.binary_search_by_key(&(shift.du, shift.dv), |s| (s.du, s.dv)).expect("every shift is listed");
+                let k = shifts
+                    .binary_search_by_key(&(shift.du, shift.dv), |s| (s.du, s.dv))
+                    .expect("every shift is listed");
                 let c = &summaries[k];
                 let sensor = Point3::from(r1.inverse() * (s0 - t1).coords);
                 let cell = self.grid.flat(&idx[..self.grid.ndim()]);
@@ -248,7 +301,10 @@ impl Context<'_> {
                 })?;
                 let (f, t) = (r1 * w.force, r1 * w.torque);
                 let depth = tw - f64::from(c.gap);
-                Ok((cell, [f.x, f.y, f.z, t.x, t.y, t.z, depth].map(|x| x as f32)))
+                Ok((
+                    cell,
+                    [f.x, f.y, f.z, t.x, t.y, t.z, depth].map(|x| x as f32),
+                ))
             })
             .collect::<Result<Vec<_>>>()?;
         progress(out.len() as u64);

@@ -31,7 +31,12 @@ impl GridAxis {
             )));
         }
         let half = (size / step).round() as usize;
-        Ok(Self { dof, min: -(half as f64) * step, step, count: 2 * half + 1 })
+        Ok(Self {
+            dof,
+            min: -(half as f64) * step,
+            step,
+            count: 2 * half + 1,
+        })
     }
 
     /// Value of sample `i`.
@@ -97,7 +102,10 @@ impl Grid {
     /// Builds a grid; refuses repeated DOFs, empty axes and non-positive steps.
     pub fn new(axes: Vec<GridAxis>) -> Result<Self> {
         if axes.len() > MAX_AXES {
-            return Err(MapError::Grid(format!("{} axes, at most {MAX_AXES}", axes.len())));
+            return Err(MapError::Grid(format!(
+                "{} axes, at most {MAX_AXES}",
+                axes.len()
+            )));
         }
         for (i, a) in axes.iter().enumerate() {
             if a.count == 0 || !(a.step > 0.0 && a.step.is_finite()) || !a.min.is_finite() {
@@ -118,7 +126,11 @@ impl Grid {
                 .checked_mul(a.count)
                 .ok_or_else(|| MapError::Grid("cell count overflows".into()))?;
         }
-        Ok(Self { axes, strides, cells })
+        Ok(Self {
+            axes,
+            strides,
+            cells,
+        })
     }
 
     /// The axes in storage order.
@@ -169,7 +181,13 @@ impl Grid {
     /// Flat index of the cell nearest to `coords` (clamped into the grid).
     pub fn nearest(&self, coords: &[f64]) -> Result<usize> {
         self.check_len(coords)?;
-        Ok(self.axes.iter().zip(coords).zip(&self.strides).map(|((a, &x), s)| a.nearest(x) * s).sum())
+        Ok(self
+            .axes
+            .iter()
+            .zip(coords)
+            .zip(&self.strides)
+            .map(|((a, &x), s)| a.nearest(x) * s)
+            .sum())
     }
 
     /// True when every coordinate lies within its axis.
@@ -182,7 +200,10 @@ impl Grid {
         if coords.len() == self.ndim() {
             Ok(())
         } else {
-            Err(MapError::Coordinates { expected: self.ndim(), got: coords.len() })
+            Err(MapError::Coordinates {
+                expected: self.ndim(),
+                got: coords.len(),
+            })
         }
     }
 
@@ -231,17 +252,40 @@ mod tests {
     #[test]
     fn paper_grids_have_the_expected_cell_counts() {
         let x = GridAxis::symmetric(dof(Axis::X), 5e-3, 1e-4).unwrap();
-        let rx = GridAxis::symmetric(dof(Axis::Rx), 2f64.to_radians(), 0.5f64.to_radians()).unwrap();
+        let rx =
+            GridAxis::symmetric(dof(Axis::Rx), 2f64.to_radians(), 0.5f64.to_radians()).unwrap();
         assert_eq!(x.count, 101);
         assert_eq!(rx.count, 9);
-        let g = Grid::new(vec![x, GridAxis { dof: dof(Axis::Y), ..x }, rx, GridAxis { dof: dof(Axis::Ry), ..rx }]).unwrap();
+        let g = Grid::new(vec![
+            x,
+            GridAxis {
+                dof: dof(Axis::Y),
+                ..x
+            },
+            rx,
+            GridAxis {
+                dof: dof(Axis::Ry),
+                ..rx
+            },
+        ])
+        .unwrap();
         assert_eq!(g.cells(), 826_281);
     }
 
     #[test]
     fn flat_and_unflat_are_inverse_and_last_axis_is_fastest() {
-        let a = GridAxis { dof: dof(Axis::X), min: -1.0, step: 0.5, count: 5 };
-        let b = GridAxis { dof: dof(Axis::Y), min: 0.0, step: 1.0, count: 3 };
+        let a = GridAxis {
+            dof: dof(Axis::X),
+            min: -1.0,
+            step: 0.5,
+            count: 5,
+        };
+        let b = GridAxis {
+            dof: dof(Axis::Y),
+            min: 0.0,
+            step: 1.0,
+            count: 3,
+        };
         let g = Grid::new(vec![a, b]).unwrap();
         assert_eq!(g.flat(&[0, 1]), 1);
         assert_eq!(g.flat(&[1, 0]), 3);
@@ -256,12 +300,32 @@ mod tests {
 
     #[test]
     fn corner_weights_sum_to_one_and_reproduce_linear_functions() {
-        let a = GridAxis { dof: dof(Axis::X), min: -1.0, step: 0.5, count: 5 };
-        let b = GridAxis { dof: dof(Axis::Y), min: 0.0, step: 1.0, count: 3 };
-        let c = GridAxis { dof: dof(Axis::Rz), min: 0.0, step: 0.1, count: 4 };
+        let a = GridAxis {
+            dof: dof(Axis::X),
+            min: -1.0,
+            step: 0.5,
+            count: 5,
+        };
+        let b = GridAxis {
+            dof: dof(Axis::Y),
+            min: 0.0,
+            step: 1.0,
+            count: 3,
+        };
+        let c = GridAxis {
+            dof: dof(Axis::Rz),
+            min: 0.0,
+            step: 0.1,
+            count: 4,
+        };
         let g = Grid::new(vec![a, b, c]).unwrap();
         let lin = |p: &[f64]| 2.0 * p[0] - 3.0 * p[1] + 5.0 * p[2] + 1.0;
-        for p in [[0.3, 1.2, 0.17], [-1.0, 0.0, 0.0], [1.0, 2.0, 0.3], [0.49, 1.99, 0.05]] {
+        for p in [
+            [0.3, 1.2, 0.17],
+            [-1.0, 0.0, 0.0],
+            [1.0, 2.0, 0.3],
+            [0.49, 1.99, 0.05],
+        ] {
             let (mut sum_w, mut val) = (0.0, 0.0);
             g.for_each_corner(&p, |i, w| {
                 sum_w += w;
@@ -274,7 +338,12 @@ mod tests {
 
     #[test]
     fn bad_grids_are_refused() {
-        let a = GridAxis { dof: dof(Axis::X), min: 0.0, step: 0.5, count: 5 };
+        let a = GridAxis {
+            dof: dof(Axis::X),
+            min: 0.0,
+            step: 0.5,
+            count: 5,
+        };
         assert!(Grid::new(vec![a, a]).is_err());
         assert!(Grid::new(vec![GridAxis { count: 0, ..a }]).is_err());
         assert!(Grid::new(vec![GridAxis { step: 0.0, ..a }]).is_err());

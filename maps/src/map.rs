@@ -15,10 +15,12 @@ pub const NCH: usize = CHANNELS.len();
 
 /// Index of a channel by name (`fx` .. `depth`).
 pub fn channel_index(name: &str) -> Result<usize> {
-    CHANNELS
-        .iter()
-        .position(|c| *c == name)
-        .ok_or_else(|| MapError::Grid(format!("unknown channel `{name}` (one of {})", CHANNELS.join(", "))))
+    CHANNELS.iter().position(|c| *c == name).ok_or_else(|| {
+        MapError::Grid(format!(
+            "unknown channel `{name}` (one of {})",
+            CHANNELS.join(", ")
+        ))
+    })
 }
 
 /// How the wrench of a contact configuration was obtained.
@@ -87,7 +89,10 @@ impl FtMap {
     pub fn from_data(grid: Grid, meta: MapMeta, data: Vec<f32>) -> Result<Self> {
         let want = grid.cells() * NCH;
         if data.len() != want {
-            return Err(MapError::Grid(format!("data has {} values, grid needs {want}", data.len())));
+            return Err(MapError::Grid(format!(
+                "data has {} values, grid needs {want}",
+                data.len()
+            )));
         }
         Ok(Self { grid, meta, data })
     }
@@ -114,12 +119,16 @@ impl FtMap {
 
     /// The channels of cell `cell`.
     pub fn cell(&self, cell: usize) -> &[f32; NCH] {
-        self.data[cell * NCH..(cell + 1) * NCH].try_into().expect("NCH values per cell")
+        self.data[cell * NCH..(cell + 1) * NCH]
+            .try_into()
+            .expect("NCH values per cell")
     }
 
     /// The channels of cell `cell`, mutable.
     pub fn cell_mut(&mut self, cell: usize) -> &mut [f32; NCH] {
-        (&mut self.data[cell * NCH..(cell + 1) * NCH]).try_into().expect("NCH values per cell")
+        (&mut self.data[cell * NCH..(cell + 1) * NCH])
+            .try_into()
+            .expect("NCH values per cell")
     }
 
     /// The channels of the cell nearest to `coords` (one coordinate per grid axis), O(1).
@@ -148,8 +157,18 @@ pub(crate) mod tests {
 
     /// A small map whose channels are known functions of the coordinates.
     pub(crate) fn sample_map() -> FtMap {
-        let x = GridAxis { dof: Dof::new(Pose::Object, Axis::X), min: -2e-3, step: 1e-3, count: 5 };
-        let y = GridAxis { dof: Dof::new(Pose::Object, Axis::Y), min: -1e-3, step: 1e-3, count: 3 };
+        let x = GridAxis {
+            dof: Dof::new(Pose::Object, Axis::X),
+            min: -2e-3,
+            step: 1e-3,
+            count: 5,
+        };
+        let y = GridAxis {
+            dof: Dof::new(Pose::Object, Axis::Y),
+            min: -1e-3,
+            step: 1e-3,
+            count: 3,
+        };
         let grid = Grid::new(vec![x, y]).unwrap();
         let meta = MapMeta {
             task: "sample".into(),
@@ -159,7 +178,11 @@ pub(crate) mod tests {
             friction: 0.3,
             sensor_origin: [0.0, 0.0, 0.05],
             pixel: 1e-4,
-            sources: vec![SourceMesh { role: "A".into(), file: "a.stl".into(), sha256: "00".into() }],
+            sources: vec![SourceMesh {
+                role: "A".into(),
+                file: "a.stl".into(),
+                sha256: "00".into(),
+            }],
             generator: "test".into(),
         };
         let mut map = FtMap::zeros(grid, meta);

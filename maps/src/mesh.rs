@@ -24,15 +24,25 @@ pub struct Mesh {
 impl Mesh {
     /// Reads an STL file; refuses missing, unreadable, empty or non-finite meshes.
     pub fn load(path: &Path) -> Result<Self> {
-        let err = |reason: String| MapError::Mesh { path: path.to_owned(), reason };
+        let err = |reason: String| MapError::Mesh {
+            path: path.to_owned(),
+            reason,
+        };
         let bytes = std::fs::read(path).map_err(|e| err(e.to_string()))?;
-        let stl = stl_io::read_stl(&mut std::io::Cursor::new(&bytes)).map_err(|e| err(format!("not a readable STL file: {e}")))?;
+        let stl = stl_io::read_stl(&mut std::io::Cursor::new(&bytes))
+            .map_err(|e| err(format!("not a readable STL file: {e}")))?;
         if stl.faces.is_empty() {
             return Err(err("the mesh has no triangles".into()));
         }
-        let vertices: Vec<Point3<f64>> =
-            stl.vertices.iter().map(|v| Point3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]))).collect();
-        if vertices.iter().any(|v| !v.coords.iter().all(|c| c.is_finite())) {
+        let vertices: Vec<Point3<f64>> = stl
+            .vertices
+            .iter()
+            .map(|v| Point3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2])))
+            .collect();
+        if vertices
+            .iter()
+            .any(|v| !v.coords.iter().all(|c| c.is_finite()))
+        {
             return Err(err("a vertex has a NaN or infinite coordinate".into()));
         }
         let faces = stl
@@ -40,13 +50,26 @@ impl Mesh {
             .iter()
             .map(|f| f.vertices.map(|i| i as u32))
             .collect();
-        let sha256 = Sha256::digest(&bytes).iter().map(|b| format!("{b:02x}")).collect();
-        Ok(Self { path: path.to_owned(), sha256, vertices, faces })
+        let sha256 = Sha256::digest(&bytes)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        Ok(Self {
+            path: path.to_owned(),
+            sha256,
+            vertices,
+            faces,
+        })
     }
 
     /// A mesh from vertices and faces (for tests and generated geometry).
     pub fn from_parts(vertices: Vec<Point3<f64>>, faces: Vec<[u32; 3]>) -> Self {
-        Self { path: PathBuf::from("<memory>"), sha256: String::new(), vertices, faces }
+        Self {
+            path: PathBuf::from("<memory>"),
+            sha256: String::new(),
+            vertices,
+            faces,
+        }
     }
 
     /// The three corners of triangle `i`.
@@ -57,7 +80,10 @@ impl Mesh {
     /// Unit outward normal of triangle `i` from its winding (zero for degenerate ones).
     pub fn normal(&self, i: usize) -> Vector3<f64> {
         let [a, b, c] = self.triangle(i);
-        (b - a).cross(&(c - a)).try_normalize(0.0).unwrap_or_else(Vector3::zeros)
+        (b - a)
+            .cross(&(c - a))
+            .try_normalize(0.0)
+            .unwrap_or_else(Vector3::zeros)
     }
 }
 

@@ -159,7 +159,10 @@ impl Task {
 
     /// Loads and checks a task file.
     pub fn load(path: &Path) -> Result<Self> {
-        let err = |reason: String| MapError::Task { path: path.to_owned(), reason };
+        let err = |reason: String| MapError::Task {
+            path: path.to_owned(),
+            reason,
+        };
         let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
         let file: TaskFile = toml::from_str(&text).map_err(|e| err(e.to_string()))?;
         let dir = path.parent().unwrap_or(Path::new("."));
@@ -174,18 +177,29 @@ impl Task {
             return Err(err(format!("contact.force {} must be > 0", contact.force)));
         }
         if !(contact.friction >= 0.0 && contact.friction.is_finite()) {
-            return Err(err(format!("contact.friction {} must be >= 0", contact.friction)));
+            return Err(err(format!(
+                "contact.friction {} must be >= 0",
+                contact.friction
+            )));
         }
         let d = &file.depth;
-        if !(d.pixel > 0.0 && d.tolerance >= 0.0 && d.pixel.is_finite() && d.tolerance.is_finite()) {
-            return Err(err(format!("depth.pixel {} must be > 0, depth.tolerance {} >= 0", d.pixel, d.tolerance)));
+        if !(d.pixel > 0.0 && d.tolerance >= 0.0 && d.pixel.is_finite() && d.tolerance.is_finite())
+        {
+            return Err(err(format!(
+                "depth.pixel {} must be > 0, depth.tolerance {} >= 0",
+                d.pixel, d.tolerance
+            )));
         }
         let task = Self {
             name: file.name,
             description: file.description,
             path: path.to_owned(),
-            part_a: Part { mesh: dir.join(file.part_a.mesh) },
-            part_b: Part { mesh: dir.join(file.part_b.mesh) },
+            part_a: Part {
+                mesh: dir.join(file.part_a.mesh),
+            },
+            part_b: Part {
+                mesh: dir.join(file.part_b.mesh),
+            },
             contact,
             omega: file.omega,
             depth: file.depth,
@@ -201,9 +215,14 @@ impl Task {
             names
                 .iter()
                 .map(|n| {
-                    Axis::ALL.into_iter().find(|a| a.name() == n).map(|a| Dof::new(pose, a)).ok_or_else(|| {
-                        MapError::Task { path: self.path.clone(), reason: format!("omega.{key}: unknown axis `{n}`") }
-                    })
+                    Axis::ALL
+                        .into_iter()
+                        .find(|a| a.name() == n)
+                        .map(|a| Dof::new(pose, a))
+                        .ok_or_else(|| MapError::Task {
+                            path: self.path.clone(),
+                            reason: format!("omega.{key}: unknown axis `{n}`"),
+                        })
                 })
                 .collect()
         };

@@ -35,7 +35,12 @@ pub struct Wrench {
 impl WrenchSetup {
     /// The wrench on A for contacts `c` under `model`, torque about `sensor` (task frame).
     /// `None` when there is no contact. `WrenchModel::Measured` is treated as `Centroid`.
-    pub fn wrench(&self, c: &ContactSummary, model: WrenchModel, sensor: &Point3<f64>) -> Option<Wrench> {
+    pub fn wrench(
+        &self,
+        c: &ContactSummary,
+        model: WrenchModel,
+        sensor: &Point3<f64>,
+    ) -> Option<Wrench> {
         if c.count == 0 {
             return None;
         }
@@ -45,9 +50,17 @@ impl WrenchSetup {
         let lever_point = match model {
             WrenchModel::Paper => {
                 let hull = convex_hull(self.row_extremes(c));
-                let p = Vector2::new(sensor.coords.dot(&self.view.u), sensor.coords.dot(&self.view.v));
+                let p = Vector2::new(
+                    sensor.coords.dot(&self.view.u),
+                    sensor.coords.dot(&self.view.v),
+                );
                 match closest_outside(&hull, p, self.pixel * 1e-3) {
-                    None => return Some(Wrench { force, torque: Vector3::zeros() }),
+                    None => {
+                        return Some(Wrench {
+                            force,
+                            torque: Vector3::zeros(),
+                        });
+                    }
                     Some(k) => self.view.unproject([k.x, k.y, mean_h]),
                 }
             }
@@ -56,12 +69,18 @@ impl WrenchSetup {
                 self.view.unproject([u, v, mean_h])
             }
         };
-        Some(Wrench { force, torque: (lever_point - sensor).cross(&force) })
+        Some(Wrench {
+            force,
+            torque: (lever_point - sensor).cross(&force),
+        })
     }
 
     /// View (u, v) of a point given in A-image columns and rows.
     fn lattice_to_view(&self, col: f64, row: f64) -> (f64, f64) {
-        ((self.origin.0 as f64 + col) * self.pixel, (self.origin.1 as f64 + row) * self.pixel)
+        (
+            (self.origin.0 as f64 + col) * self.pixel,
+            (self.origin.1 as f64 + row) * self.pixel,
+        )
     }
 
     /// The first and last contact pixel of every contact row, in view (u, v).
@@ -80,7 +99,10 @@ impl WrenchSetup {
     /// the friction angle, scaled so its component against the approach is the imposed force.
     fn force_on_a(&self, c: &ContactSummary) -> Vector3<f64> {
         let w = Vector3::z();
-        let n = Vector3::from(c.sum_normal).try_normalize(1e-12).filter(|n| n.z > 1e-6).unwrap_or(w);
+        let n = Vector3::from(c.sum_normal)
+            .try_normalize(1e-12)
+            .filter(|n| n.z > 1e-6)
+            .unwrap_or(w);
         let phi = self.friction.atan();
         let dir = if n.z.clamp(-1.0, 1.0).acos() <= phi {
             w
@@ -105,7 +127,9 @@ pub fn convex_hull(mut pts: Vec<Vector2<f64>>) -> Vec<Vector2<f64>> {
     for pass in [pts.clone(), pts.iter().rev().copied().collect()] {
         let start = hull.len();
         for p in pass {
-            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
                 hull.pop();
             }
             hull.push(p);
@@ -120,14 +144,19 @@ pub fn convex_hull(mut pts: Vec<Vector2<f64>>) -> Vec<Vector2<f64>> {
 pub fn closest_outside(hull: &[Vector2<f64>], p: Vector2<f64>, eps: f64) -> Option<Vector2<f64>> {
     let closest_on = |a: Vector2<f64>, b: Vector2<f64>| {
         let ab = b - a;
-        let t = if ab.norm_squared() > 0.0 { ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0) } else { 0.0 };
+        let t = if ab.norm_squared() > 0.0 {
+            ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         a + ab * t
     };
     let k = match hull.len() {
         0 => return None,
         1 => hull[0],
         n => {
-            let inside = n >= 3 && (0..n).all(|i| (hull[(i + 1) % n] - hull[i]).perp(&(p - hull[i])) >= 0.0);
+            let inside =
+                n >= 3 && (0..n).all(|i| (hull[(i + 1) % n] - hull[i]).perp(&(p - hull[i])) >= 0.0);
             if inside {
                 return None;
             }
@@ -146,16 +175,33 @@ mod tests {
 
     #[test]
     fn hull_of_a_square_with_inner_points() {
-        let pts = [(0., 0.), (2., 0.), (2., 2.), (0., 2.), (1., 1.), (1., 0.), (0.5, 1.5)]
-            .map(|(x, y)| Vector2::new(x, y))
-            .to_vec();
+        let pts = [
+            (0., 0.),
+            (2., 0.),
+            (2., 2.),
+            (0., 2.),
+            (1., 1.),
+            (1., 0.),
+            (0.5, 1.5),
+        ]
+        .map(|(x, y)| Vector2::new(x, y))
+        .to_vec();
         let hull = convex_hull(pts);
         assert_eq!(hull.len(), 4);
-        let area: f64 = (0..4).map(|i| hull[i].perp(&hull[(i + 1) % 4])).sum::<f64>() / 2.0;
+        let area: f64 = (0..4)
+            .map(|i| hull[i].perp(&hull[(i + 1) % 4]))
+            .sum::<f64>()
+            / 2.0;
         assert!((area - 4.0).abs() < 1e-12, "counter-clockwise area {area}");
         assert_eq!(closest_outside(&hull, Vector2::new(1.0, 1.0), 1e-9), None);
-        assert_eq!(closest_outside(&hull, Vector2::new(3.0, 1.0), 1e-9), Some(Vector2::new(2.0, 1.0)));
-        assert_eq!(closest_outside(&hull, Vector2::new(-1.0, -1.0), 1e-9), Some(Vector2::new(0.0, 0.0)));
+        assert_eq!(
+            closest_outside(&hull, Vector2::new(3.0, 1.0), 1e-9),
+            Some(Vector2::new(2.0, 1.0))
+        );
+        assert_eq!(
+            closest_outside(&hull, Vector2::new(-1.0, -1.0), 1e-9),
+            Some(Vector2::new(0.0, 0.0))
+        );
     }
 
     #[test]
@@ -184,7 +230,10 @@ mod tests {
         let s = 45f64.to_radians();
         let f = setup.force_on_a(&contact([s.sin(), 0.0, s.cos()]));
         let tilt = f.x.atan2(f.z).to_degrees();
-        assert!((tilt - (45.0 - 0.3f64.atan().to_degrees())).abs() < 1e-9, "{tilt}");
+        assert!(
+            (tilt - (45.0 - 0.3f64.atan().to_degrees())).abs() < 1e-9,
+            "{tilt}"
+        );
         assert!((f.z - 50.0).abs() < 1e-9);
     }
 }

@@ -296,7 +296,10 @@ fn paper_model_gives_no_rim_torque_once_the_crescent_hull_holds_the_axis() {
     // the pixel hull loses them: test clear of the critical offset by 0.5 mm above and
     // 0.2 mm below.
     let critical = (5.0e-3f64.powi(2) - 4.95e-3f64.powi(2)).sqrt();
-    let opts = GenerateOptions { model: WrenchModel::Paper, shard: None };
+    let opts = GenerateOptions {
+        model: WrenchModel::Paper,
+        shard: None,
+    };
     let map = generate(&peg_task(3e-3, 1e-4), &CpuBackend, &opts, &|_| ()).unwrap();
     let axis = map.grid().axes()[0];
     for i in 0..axis.count {
@@ -311,10 +314,19 @@ fn paper_model_gives_no_rim_torque_once_the_crescent_hull_holds_the_axis() {
                 // Lever = distance from the axis to the chord between the crescent's tips,
                 // (R^2 - r^2 - d^2) / 2d; the pixel hull's trimmed tips only lengthen it.
                 let chord = (5.0e-3f64.powi(2) - 4.95e-3f64.powi(2) - d * d) / (2.0 * d);
-                assert!(t / F > chord - 5e-5, "offset {d}: lever {} mm, chord at {} mm", t / F * 1e3, chord * 1e3);
+                assert!(
+                    t / F > chord - 5e-5,
+                    "offset {d}: lever {} mm, chord at {} mm",
+                    t / F * 1e3,
+                    chord * 1e3
+                );
                 // Along z x offset, within the pixel hull's ragged edge (cos > 0.9).
                 let along = (-y * f64::from(c[3]) + x * f64::from(c[4])) / (t * d);
-                assert!(along > 0.9, "offset ({x}, {y}): torque {:?} not along z x offset", &c[3..5]);
+                assert!(
+                    along > 0.9,
+                    "offset ({x}, {y}): torque {:?} not along z x offset",
+                    &c[3..5]
+                );
             }
         }
     }

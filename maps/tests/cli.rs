@@ -5,12 +5,19 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn ftmap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ftmap")).args(args).output().expect("ftmap runs")
+    Command::new(env!("CARGO_BIN_EXE_ftmap"))
+        .args(args)
+        .output()
+        .expect("ftmap runs")
 }
 
 fn ok(args: &[&str]) -> String {
     let out = ftmap(args);
-    assert!(out.status.success(), "ftmap {args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "ftmap {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
@@ -34,16 +41,35 @@ fn scratch(name: &str) -> (PathBuf, PathBuf) {
 fn generate_info_export_and_plot_agree_with_each_other() {
     let (dir, task) = scratch("main");
     let map = dir.join("peg.ftmap");
-    let out = ok(&["generate", "--task", task.to_str().unwrap(), "--out", map.to_str().unwrap()]);
+    let out = ok(&[
+        "generate",
+        "--task",
+        task.to_str().unwrap(),
+        "--out",
+        map.to_str().unwrap(),
+    ]);
     assert!(out.contains("configs/s"), "{out}");
     let info = ok(&["info", map.to_str().unwrap()]);
-    assert!(info.contains("object.x") && info.contains("25 cells") && info.contains("Centroid"), "{info}");
+    assert!(
+        info.contains("object.x") && info.contains("25 cells") && info.contains("Centroid"),
+        "{info}"
+    );
 
     let csv_path = dir.join("peg.csv");
-    ok(&["export-csv", map.to_str().unwrap(), "--out", csv_path.to_str().unwrap()]);
+    ok(&[
+        "export-csv",
+        map.to_str().unwrap(),
+        "--out",
+        csv_path.to_str().unwrap(),
+    ]);
     let mut rd = csv::Reader::from_path(&csv_path).unwrap();
     let header: Vec<String> = rd.headers().unwrap().iter().map(str::to_owned).collect();
-    assert_eq!(header, ["object.x", "object.y", "fx", "fy", "fz", "tx", "ty", "tz", "depth"]);
+    assert_eq!(
+        header,
+        [
+            "object.x", "object.y", "fx", "fy", "fz", "tx", "ty", "tz", "depth"
+        ]
+    );
     let loaded = ftmap::format::load(&map).unwrap();
     let mut rows = 0;
     for rec in rd.records() {
@@ -57,10 +83,24 @@ fn generate_info_export_and_plot_agree_with_each_other() {
     assert_eq!(rows, 25);
 
     let png = dir.join("ty.png");
-    ok(&["plot", map.to_str().unwrap(), "--channel", "ty", "--out", png.to_str().unwrap()]);
+    ok(&[
+        "plot",
+        map.to_str().unwrap(),
+        "--channel",
+        "ty",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
-    let bad = ftmap(&["plot", map.to_str().unwrap(), "--channel", "tq", "--out", png.to_str().unwrap()]);
+    let bad = ftmap(&[
+        "plot",
+        map.to_str().unwrap(),
+        "--channel",
+        "tq",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown channel `tq`"));
     std::fs::remove_dir_all(dir).ok();
@@ -81,19 +121,40 @@ fn shards_merge_into_the_whole_map() {
     ok(&["generate", "--task", t, "--out", whole.to_str().unwrap()]);
     let parts: Vec<PathBuf> = (0..2).map(|i| dir.join(format!("part{i}.ftmap"))).collect();
     for (i, p) in parts.iter().enumerate() {
-        ok(&["generate", "--task", t, "--shard", &format!("{i}/2"), "--out", p.to_str().unwrap()]);
+        ok(&[
+            "generate",
+            "--task",
+            t,
+            "--shard",
+            &format!("{i}/2"),
+            "--out",
+            p.to_str().unwrap(),
+        ]);
     }
     // A shard is not a map: the loader says so.
-    let refused = ftmap(&["export-csv", parts[0].to_str().unwrap(), "--out", dir.join("x.csv").to_str().unwrap()]);
+    let refused = ftmap(&[
+        "export-csv",
+        parts[0].to_str().unwrap(),
+        "--out",
+        dir.join("x.csv").to_str().unwrap(),
+    ]);
     assert!(String::from_utf8_lossy(&refused.stderr).contains("shard 0 of 2"));
     let merged = dir.join("merged.ftmap");
     let mut args = vec!["merge"];
     args.extend(parts.iter().map(|p| p.to_str().unwrap()));
     args.extend(["--out", merged.to_str().unwrap()]);
     ok(&args);
-    let (a, b) = (ftmap::format::load(&whole).unwrap(), ftmap::format::load(&merged).unwrap());
+    let (a, b) = (
+        ftmap::format::load(&whole).unwrap(),
+        ftmap::format::load(&merged).unwrap(),
+    );
     assert_eq!(a.data(), b.data());
-    let missing = ftmap(&["merge", parts[0].to_str().unwrap(), "--out", merged.to_str().unwrap()]);
+    let missing = ftmap(&[
+        "merge",
+        parts[0].to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
     assert!(String::from_utf8_lossy(&missing.stderr).contains("shard 1/2 is missing"));
     std::fs::remove_dir_all(dir).ok();
 }
@@ -102,8 +163,20 @@ fn shards_merge_into_the_whole_map() {
 fn bad_input_gets_an_error_that_names_the_problem() {
     let (dir, task) = scratch("bad");
     let cases: Vec<(Vec<String>, &str)> = vec![
-        (vec!["info".into(), dir.join("none.ftmap").display().to_string()], "No such file"),
-        (vec!["generate".into(), "--task".into(), "no_such_task".into(), "--out".into(), "x".into()], "known tasks"),
+        (
+            vec!["info".into(), dir.join("none.ftmap").display().to_string()],
+            "No such file",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "--task".into(),
+                "no_such_task".into(),
+                "--out".into(),
+                "x".into(),
+            ],
+            "known tasks",
+        ),
     ];
     for (args, expect) in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
@@ -113,14 +186,28 @@ fn bad_input_gets_an_error_that_names_the_problem() {
         assert!(err.contains(expect), "{args:?}: {err}");
     }
     // A missing mesh is named.
-    let text = std::fs::read_to_string(&task).unwrap().replace("peg.stl", "gone.stl");
+    let text = std::fs::read_to_string(&task)
+        .unwrap()
+        .replace("peg.stl", "gone.stl");
     std::fs::write(&task, text).unwrap();
-    let out = ftmap(&["generate", "--task", task.to_str().unwrap(), "--out", dir.join("m.ftmap").to_str().unwrap()]);
+    let out = ftmap(&[
+        "generate",
+        "--task",
+        task.to_str().unwrap(),
+        "--out",
+        dir.join("m.ftmap").to_str().unwrap(),
+    ]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("gone.stl"));
     // A corrupted map is refused as corrupted.
     let (dir2, task2) = scratch("bad2");
     let map = dir2.join("m.ftmap");
-    ok(&["generate", "--task", task2.to_str().unwrap(), "--out", map.to_str().unwrap()]);
+    ok(&[
+        "generate",
+        "--task",
+        task2.to_str().unwrap(),
+        "--out",
+        map.to_str().unwrap(),
+    ]);
     let mut bytes = std::fs::read(&map).unwrap();
     let n = bytes.len();
     bytes[n - 20] ^= 1;

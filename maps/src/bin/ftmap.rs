@@ -13,7 +13,11 @@ use ftmap::generate::{GenerateOptions, generate, merge};
 use ftmap::{CHANNELS, FtMap, Task, UNITS, WrenchModel, cad, format, plot};
 
 #[derive(Parser)]
-#[command(name = "ftmap", version, about = "Force Torque Maps from CAD meshes by the z-buffer method")]
+#[command(
+    name = "ftmap",
+    version,
+    about = "Force Torque Maps from CAD meshes by the z-buffer method"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -103,7 +107,10 @@ enum Cmd {
 
 fn parse_shard(s: &str) -> Result<[usize; 2], String> {
     let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 0/4")?;
-    let (i, n) = (i.parse::<usize>().map_err(|e| e.to_string())?, n.parse::<usize>().map_err(|e| e.to_string())?);
+    let (i, n) = (
+        i.parse::<usize>().map_err(|e| e.to_string())?,
+        n.parse::<usize>().map_err(|e| e.to_string())?,
+    );
     if n == 0 || i >= n {
         return Err(format!("shard {i}/{n}: need N >= 1 and 0 <= I < N"));
     }
@@ -111,17 +118,40 @@ fn parse_shard(s: &str) -> Result<[usize; 2], String> {
 }
 
 fn parse_at(s: &str) -> Result<(String, f64), String> {
-    let (k, v) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected AXIS=VALUE, e.g. rx=0"))?;
-    Ok((k.trim().to_owned(), v.trim().parse::<f64>().map_err(|e| format!("`{s}`: {e}"))?))
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}`: expected AXIS=VALUE, e.g. rx=0"))?;
+    Ok((
+        k.trim().to_owned(),
+        v.trim().parse::<f64>().map_err(|e| format!("`{s}`: {e}"))?,
+    ))
 }
 
 fn main() -> Result<()> {
     match Cli::parse().cmd {
-        Cmd::Generate { task, backend, model, out, shard, require_gpu } => cmd_generate(&task, backend, model, &out, shard, require_gpu),
+        Cmd::Generate {
+            task,
+            backend,
+            model,
+            out,
+            shard,
+            require_gpu,
+        } => cmd_generate(&task, backend, model, &out, shard, require_gpu),
         Cmd::Info { file } => cmd_info(&file),
         Cmd::ExportCsv { file, out } => cmd_export_csv(&file, &out),
-        Cmd::Plot { file, channel, at, axes, out } => cmd_plot(&file, &channel, &at, axes.as_deref(), &out),
-        Cmd::Bench { task, backend, model, require_gpu } => cmd_bench(&task, &backend, model, require_gpu),
+        Cmd::Plot {
+            file,
+            channel,
+            at,
+            axes,
+            out,
+        } => cmd_plot(&file, &channel, &at, axes.as_deref(), &out),
+        Cmd::Bench {
+            task,
+            backend,
+            model,
+            require_gpu,
+        } => cmd_bench(&task, &backend, model, require_gpu),
         Cmd::Merge { shards, out } => cmd_merge(&shards, &out),
         Cmd::Cad { task, check } => cmd_cad(&task, check),
     }
@@ -132,20 +162,32 @@ fn make_backend(kind: BackendKind, require_gpu: bool) -> Result<Box<dyn DepthBac
     Ok(match kind {
         BackendKind::Cpu => Box::new(ftmap::cpu::CpuBackend),
         #[cfg(not(feature = "gpu"))]
-        BackendKind::Gpu => bail!("this build of ftmap has no GPU backend (built without the `gpu` feature)"),
+        BackendKind::Gpu => {
+            bail!("this build of ftmap has no GPU backend (built without the `gpu` feature)")
+        }
         #[cfg(feature = "gpu")]
         BackendKind::Gpu => {
             let gpu = ftmap::gpu::GpuBackend::new().context("starting the GPU backend")?;
             eprintln!("GPU adapter: {}", gpu.name());
             if require_gpu && gpu.is_cpu_adapter() {
-                bail!("a GPU was required but the adapter found is a CPU one ({}): is the GPU's Vulkan driver (ICD) installed?", gpu.name());
+                bail!(
+                    "a GPU was required but the adapter found is a CPU one ({}): is the GPU's Vulkan driver (ICD) installed?",
+                    gpu.name()
+                );
             }
             Box::new(gpu)
         }
     })
 }
 
-fn cmd_generate(task: &str, kind: BackendKind, model: WrenchModel, out: &Path, shard: Option<[usize; 2]>, require_gpu: bool) -> Result<()> {
+fn cmd_generate(
+    task: &str,
+    kind: BackendKind,
+    model: WrenchModel,
+    out: &Path,
+    shard: Option<[usize; 2]>,
+    require_gpu: bool,
+) -> Result<()> {
     let task = Task::find(task)?;
     let backend = make_backend(kind, require_gpu)?;
     let grid = task.grid()?;
@@ -154,16 +196,27 @@ fn cmd_generate(task: &str, kind: BackendKind, model: WrenchModel, out: &Path, s
         Some(_) => 0,
     };
     let bar = ProgressBar::new(total).with_style(
-        ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {human_pos}/{human_len} configs, {per_sec}, eta {eta}")
-            .context("progress template")?
-            .progress_chars("=> "),
+        ProgressStyle::with_template(
+            "{spinner} {msg} [{bar:40}] {human_pos}/{human_len} configs, {per_sec}, eta {eta}",
+        )
+        .context("progress template")?
+        .progress_chars("=> "),
     );
     bar.set_message(format!("{} ({})", task.name, backend.name()));
     let start = Instant::now();
-    let map = generate(&task, backend.as_ref(), &GenerateOptions { model, shard }, &|n| bar.inc(n))?;
+    let map = generate(
+        &task,
+        backend.as_ref(),
+        &GenerateOptions { model, shard },
+        &|n| bar.inc(n),
+    )?;
     let secs = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    let done = map.data().chunks_exact(ftmap::NCH).filter(|c| !c[0].is_nan()).count();
+    let done = map
+        .data()
+        .chunks_exact(ftmap::NCH)
+        .filter(|c| !c[0].is_nan())
+        .count();
     format::write_bytes(&format::encode(&map, shard), out)?;
     println!(
         "{}: {} configs in {:.2} s = {:.0} configs/s ({}, {:?} model) -> {}",
@@ -179,22 +232,37 @@ fn cmd_generate(task: &str, kind: BackendKind, model: WrenchModel, out: &Path, s
 }
 
 fn human_axis(rot: bool, v: f64) -> String {
-    if rot { format!("{:+.3}°", v.to_degrees()) } else { format!("{:+.3} mm", v * 1e3) }
+    if rot {
+        format!("{:+.3}°", v.to_degrees())
+    } else {
+        format!("{:+.3} mm", v * 1e3)
+    }
 }
 
 fn cmd_info(file: &Path) -> Result<()> {
     let (map, shard) = format::load_any(file)?;
     let m = map.meta();
     let g = map.grid();
-    println!("file       {} ({} bytes)", file.display(), std::fs::metadata(file)?.len());
+    println!(
+        "file       {} ({} bytes)",
+        file.display(),
+        std::fs::metadata(file)?.len()
+    );
     if let Some([i, n]) = shard {
         println!("shard      {i} of {n} (other cells are NaN; join with `ftmap merge`)");
     }
     println!("task       {}", m.task);
     println!("model      {:?}", m.model);
     println!("generator  {}", m.generator);
-    println!("approach   {:?}  force {} N  friction {}", m.approach, m.force, m.friction);
-    println!("sensor     {:?} m (task frame)  pixel {} mm", m.sensor_origin, m.pixel * 1e3);
+    println!(
+        "approach   {:?}  force {} N  friction {}",
+        m.approach, m.force, m.friction
+    );
+    println!(
+        "sensor     {:?} m (task frame)  pixel {} mm",
+        m.sensor_origin,
+        m.pixel * 1e3
+    );
     for s in &m.sources {
         println!("mesh {}     {} sha256 {}", s.role, s.file, s.sha256);
     }
@@ -210,15 +278,27 @@ fn cmd_info(file: &Path) -> Result<()> {
             a.count
         );
     }
-    println!("channels   {:<6} {:>12} {:>12} {:>12}", "", "min", "mean", "max");
+    println!(
+        "channels   {:<6} {:>12} {:>12} {:>12}",
+        "", "min", "mean", "max"
+    );
     for (c, (name, unit)) in CHANNELS.iter().zip(UNITS).enumerate() {
-        let vals = map.data().iter().skip(c).step_by(ftmap::NCH).copied().filter(|v| v.is_finite());
+        let vals = map
+            .data()
+            .iter()
+            .skip(c)
+            .step_by(ftmap::NCH)
+            .copied()
+            .filter(|v| v.is_finite());
         let (mut lo, mut hi, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
         for v in vals {
             let v = f64::from(v);
             (lo, hi, sum, n) = (lo.min(v), hi.max(v), sum + v, n + 1);
         }
-        println!("  {name:<6} {unit:<4} {lo:>12.5} {:>12.5} {hi:>12.5}", sum / n.max(1) as f64);
+        println!(
+            "  {name:<6} {unit:<4} {lo:>12.5} {:>12.5} {hi:>12.5}",
+            sum / n.max(1) as f64
+        );
     }
     Ok(())
 }
@@ -228,9 +308,15 @@ fn cmd_export_csv(file: &Path, out: &Path) -> Result<()> {
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
-    let mut w = csv::Writer::from_path(out).with_context(|| format!("creating {}", out.display()))?;
+    let mut w =
+        csv::Writer::from_path(out).with_context(|| format!("creating {}", out.display()))?;
     let g = map.grid();
-    let header: Vec<String> = g.axes().iter().map(|a| a.dof.to_string()).chain(CHANNELS.iter().map(|c| c.to_string())).collect();
+    let header: Vec<String> = g
+        .axes()
+        .iter()
+        .map(|a| a.dof.to_string())
+        .chain(CHANNELS.iter().map(|c| c.to_string()))
+        .collect();
     w.write_record(&header)?;
     let mut row: Vec<String> = Vec::with_capacity(header.len());
     for cell in 0..g.cells() {
@@ -244,7 +330,13 @@ fn cmd_export_csv(file: &Path, out: &Path) -> Result<()> {
     Ok(())
 }
 
-fn cmd_plot(file: &Path, channel: &str, at: &[(String, f64)], axes: Option<&str>, out: &Path) -> Result<()> {
+fn cmd_plot(
+    file: &Path,
+    channel: &str,
+    at: &[(String, f64)],
+    axes: Option<&str>,
+    out: &Path,
+) -> Result<()> {
     let map = format::load(file)?;
     let g = map.grid();
     let find = |name: &str| {
@@ -256,24 +348,44 @@ fn cmd_plot(file: &Path, channel: &str, at: &[(String, f64)], axes: Option<&str>
     let axes = match axes {
         None => None,
         Some(s) => {
-            let (x, y) = s.split_once(',').context("--axes expects two names, e.g. object.x,object.y")?;
+            let (x, y) = s
+                .split_once(',')
+                .context("--axes expects two names, e.g. object.x,object.y")?;
             Some([find(x.trim())?, find(y.trim())?])
         }
     };
     // --at is given in mm and degrees: convert to SI.
     let at_si = at
         .iter()
-        .map(|(name, v)| Ok((name.clone(), if g.axes()[find(name)?].dof.is_rotation() { v.to_radians() } else { v * 1e-3 })))
+        .map(|(name, v)| {
+            Ok((
+                name.clone(),
+                if g.axes()[find(name)?].dof.is_rotation() {
+                    v.to_radians()
+                } else {
+                    v * 1e-3
+                },
+            ))
+        })
         .collect::<Result<Vec<_>>>()?;
     plot::heat_map(&map, channel, axes, &at_si, out)?;
     println!("{} -> {}", channel, out.display());
     Ok(())
 }
 
-fn cmd_bench(task: &str, kinds: &[BackendKind], model: WrenchModel, require_gpu: bool) -> Result<()> {
+fn cmd_bench(
+    task: &str,
+    kinds: &[BackendKind],
+    model: WrenchModel,
+    require_gpu: bool,
+) -> Result<()> {
     let task = Task::find(task)?;
     let cells = task.grid()?.cells();
-    let kinds = if kinds.is_empty() { vec![BackendKind::Cpu, BackendKind::Gpu] } else { kinds.to_vec() };
+    let kinds = if kinds.is_empty() {
+        vec![BackendKind::Cpu, BackendKind::Gpu]
+    } else {
+        kinds.to_vec()
+    };
     println!("task {}: {} configs, {:?} model", task.name, cells, model);
     let mut reference: Option<FtMap> = None;
     for kind in kinds {
@@ -287,12 +399,20 @@ fn cmd_bench(task: &str, kinds: &[BackendKind], model: WrenchModel, require_gpu:
         };
         let opts = GenerateOptions { model, shard: None };
         // Warm up on one rotation cell (GPU pipelines, page faults), then time the whole map.
-        let warm = GenerateOptions { model, shard: Some([0, cells]) };
+        let warm = GenerateOptions {
+            model,
+            shard: Some([0, cells]),
+        };
         generate(&task, backend.as_ref(), &warm, &|_| ())?;
         let start = Instant::now();
         let map = generate(&task, backend.as_ref(), &opts, &|_| ())?;
         let secs = start.elapsed().as_secs_f64();
-        println!("{:<40} {:>10.3} s {:>14.0} configs/s", backend.name(), secs, cells as f64 / secs);
+        println!(
+            "{:<40} {:>10.3} s {:>14.0} configs/s",
+            backend.name(),
+            secs,
+            cells as f64 / secs
+        );
         match &reference {
             None => reference = Some(map),
             Some(r) => {
@@ -300,9 +420,18 @@ fn cmd_bench(task: &str, kinds: &[BackendKind], model: WrenchModel, require_gpu:
                     .data()
                     .chunks_exact(ftmap::NCH)
                     .zip(map.data().chunks_exact(ftmap::NCH))
-                    .filter(|(a, b)| a.iter().zip(*b).any(|(x, y)| (x - y).abs() > 1e-3 * x.abs().max(1.0)))
+                    .filter(|(a, b)| {
+                        a.iter()
+                            .zip(*b)
+                            .any(|(x, y)| (x - y).abs() > 1e-3 * x.abs().max(1.0))
+                    })
                     .count();
-                let max_diff = r.data().iter().zip(map.data()).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+                let max_diff = r
+                    .data()
+                    .iter()
+                    .zip(map.data())
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0f32, f32::max);
                 println!(
                     "{:<40} cells differing from the first backend: {cells_differing} of {cells} (max |difference| {max_diff:.3e})",
                     ""
@@ -331,7 +460,13 @@ fn cmd_cad(task: &str, check: bool) -> Result<()> {
     let dirs = if task == "all" {
         cad::task_dirs_with_geometry(&ftmap::task::models_root())?
     } else {
-        vec![Task::find(task)?.path.parent().map(Path::to_owned).unwrap_or_default()]
+        vec![
+            Task::find(task)?
+                .path
+                .parent()
+                .map(Path::to_owned)
+                .unwrap_or_default(),
+        ]
     };
     let mut stale_total = 0;
     for dir in dirs {
