@@ -116,6 +116,11 @@ pub fn generate_with(
     opts: &GenerateOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<FtMap> {
+    if opts.model == WrenchModel::Measured {
+        return Err(MapError::Geometry(
+            "a measured map comes from contact motions (`harness scan`), not from CAD: use --model paper or centroid".into(),
+        ));
+    }
     let grid = task.grid()?;
     let meta = MapMeta {
         task: task.name.clone(),

@@ -34,7 +34,7 @@ pub struct Wrench {
 
 impl WrenchSetup {
     /// The wrench on A for contacts `c` under `model`, torque about `sensor` (task frame).
-    /// `None` when there is no contact. `WrenchModel::Measured` is treated as `Centroid`.
+    /// `None` when there is no contact. (`Measured` maps are not computed; it reads as `Centroid`.)
     pub fn wrench(
         &self,
         c: &ContactSummary,
