@@ -28,6 +28,31 @@ pub struct Cli {
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Render the vision camera's image (experiment D) with the expected CAD edges (blue)
+    /// and the detected lines (red) drawn over it; prints each edge's detection.
+    Render {
+        /// Task name or task.toml path (a task whose scene has a camera).
+        #[arg(long, default_value = "bearing_housing")]
+        task: String,
+        /// Output PNG.
+        #[arg(long, default_value = "out/d.png")]
+        out: PathBuf,
+        /// True offset of part B, "x,y" in mm.
+        #[arg(long, default_value = "2,-3", allow_hyphen_values = true)]
+        object_mm: String,
+        /// Task frame (part A), "x,y" in mm; it hangs at the approach height.
+        #[arg(long, default_value = "0,0", allow_hyphen_values = true)]
+        tcp_mm: String,
+        /// Gaussian image noise (grey levels) added before detection.
+        #[arg(long, default_value_t = 0.0)]
+        noise: f64,
+        /// Seed of the noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Only time the detection on this many noisy copies of the image (ms per image).
+        #[arg(long)]
+        bench: Option<usize>,
+    },
     /// Write (or check) models_mjcf/<task>/scene.xml from the task's task.toml.
     Scene {
         /// Task name or task.toml path; all tasks with a [geometry] table when omitted.
@@ -223,6 +248,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     crate::runtime::check_mujoco()?;
     match cli.command {
         Command::Scene { task, check } => scene_cmd(task.as_deref(), check),
+        Command::Render { task, out, object_mm, tcp_mm, noise, seed, bench } => {
+            render_cmd(&task, &out, &parse_mm(&object_mm)?, &parse_mm(&tcp_mm)?, noise, seed, bench)
+        }
         Command::Trials { run, trials, range_mm } => {
             let (task, mut sim) = open_task(&run.task)?;
             let cfg = config(&run, &task)?;
@@ -293,6 +321,93 @@ fn scene_cmd(task: Option<&str>, check: bool) -> anyhow::Result<()> {
     if !stale.is_empty() {
         bail!("scenes not current (run `harness scene`): {}", stale.join(", "));
     }
+    Ok(())
+}
+
+fn parse_mm(s: &str) -> anyhow::Result<[f64; 2]> {
+    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().with_context(|| format!("\"{s}\": want x,y in mm"))?;
+    match v.as_slice() {
+        [x, y] => Ok([x * 1e-3, y * 1e-3]),
+        _ => bail!("\"{s}\": want x,y in mm"),
+    }
+}
+
+fn render_cmd(task: &str, out: &Path, object: &[f64; 2], tcp: &[f64; 2], noise: f64, seed: u64, bench: Option<usize>) -> anyhow::Result<()> {
+    use crate::camera::{CameraScene, RgbImage};
+    use crate::vision::{self, BearingGeometry};
+    let task = Task::find(task)?;
+    let spec = SceneSpec::of_task(&task)?;
+    let geo = BearingGeometry::of_task(&task).with_context(|| format!("task {} has no vision edges (only bearing_housing)", task.name))?;
+    let mut view = CameraScene::load(&scene::scene_path(&task), spec)?;
+    let tcp = [tcp[0], tcp[1], view.approach_height()];
+    view.place(*object, tcp);
+    let t0 = std::time::Instant::now();
+    let image = view.render()?;
+    let render_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let cam = view.camera();
+    let mut gray = image.to_gray();
+    if noise > 0.0 {
+        vision::add_noise(&mut gray, noise, seed);
+    }
+    if let Some(n) = bench {
+        let copies: Vec<Vec<f32>> = (0..n.max(1) as u64)
+            .map(|k| {
+                let mut g = image.to_gray();
+                vision::add_noise(&mut g, noise.max(5.0), seed + k);
+                g
+            })
+            .collect();
+        let t = std::time::Instant::now();
+        let mut found = 0;
+        for g in &copies {
+            found += vision::detect_bearing(g, &cam, &geo, tcp, *object, task.omega.size_trans).iter().filter(|e| e.found.is_ok()).count();
+        }
+        let ms = t.elapsed().as_secs_f64() * 1e3 / copies.len() as f64;
+        println!(
+            "detection (Sobel + 4 edges) on {} noisy {}x{} images: {ms:.2} ms per image ({found} of {} edges found); render {render_ms:.1} ms",
+            copies.len(),
+            cam.width,
+            cam.height,
+            4 * copies.len()
+        );
+        return Ok(());
+    }
+    let results = vision::detect_bearing(&gray, &cam, &geo, tcp, *object, task.omega.size_trans);
+    let mut img = if noise > 0.0 { RgbImage::from_gray(cam.width, cam.height, &gray) } else { image };
+    println!("camera: {}x{} px, fovy {} deg, f = {:.1} px, at {:?} m; render {render_ms:.1} ms", cam.width, cam.height, cam.fovy, cam.focal(), cam.pos);
+    println!("{:<14} {:>9} {:>9} {:>9} {:>9} {:>6}  detected", "edge", "angle", "offset", "d_angle", "d_offset", "band");
+    let mut lines = std::collections::BTreeMap::new();
+    for r in &results {
+        img.line(r.expected.p0, r.expected.p1, [60, 120, 255]);
+        match &r.found {
+            Ok(l) => {
+                img.line(l.p0, l.p1, [255, 40, 40]);
+                img.cross(l.p0, [255, 220, 0]);
+                img.cross(l.p1, [255, 220, 0]);
+                println!(
+                    "{:<14} {:>9.3} {:>9.2} {:>9.3} {:>9.3} {:>6.0}  {} points, rms {:.2} px",
+                    r.name,
+                    l.angle,
+                    l.offset,
+                    l.angle - r.truth.angle,
+                    l.offset - r.truth.offset,
+                    r.band,
+                    l.points,
+                    l.rms
+                );
+                lines.insert(r.name.clone(), l.clone());
+            }
+            Err(e) => println!("{:<14} {e}", r.name),
+        }
+    }
+    let v = cam.project([tcp[0], tcp[1], tcp[2]]).map_or(0.0, |p| p[1]);
+    for side in ["left", "right"] {
+        if let (Some(h), Some(s)) = (lines.get(&format!("housing.{side}")), lines.get(&format!("seat.{side}"))) {
+            println!("vision.{side}_distance = {:.2} px (seat edge minus housing edge, along u at row {v:.0})", vision::u_distance(h, s, v));
+        }
+    }
+    img.save_png(out)?;
+    println!("image {} (blue: expected CAD edges, red: detected lines, yellow: endpoints)", out.display());
     Ok(())
 }
 

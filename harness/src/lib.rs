@@ -3,6 +3,7 @@
 //! the closed loop of the paper's Algorithm 1 through `FtFusion.fmu` (the `fmi` importer),
 //! with trial campaigns, measured maps and plots.
 
+pub mod camera;
 pub mod campaign;
 pub mod cli;
 pub mod compare;
@@ -15,5 +16,6 @@ pub mod scene;
 pub mod sensor;
 pub mod sim;
 pub mod trial;
+pub mod vision;
 
 pub use error::{HarnessError, Result};

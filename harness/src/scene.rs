@@ -43,6 +43,36 @@ const SOLREF: &str = "0.002 1";
 /// Contact impedance (d0, dwidth, width).
 const SOLIMP: &str = "0.99 0.999 0.0005";
 
+/// Resolution of the vision camera (px): MuJoCo's offscreen buffer is set to it.
+pub const CAMERA_RESOLUTION: [usize; 2] = [640, 480];
+
+/// A calibrated camera of the work cell (experiment D of the paper): MJCF `<camera>`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraSpec {
+    /// Name of the MJCF camera.
+    pub name: String,
+    /// Position in the world (= nominal goal) frame (m).
+    pub pos: [f64; 3],
+    /// Camera x axis (image right) and y axis (image up) in the world frame; it looks along -z.
+    pub xyaxes: [f64; 6],
+    /// Vertical field of view (degrees, as MJCF always gives it).
+    pub fovy: f64,
+}
+
+impl CameraSpec {
+    /// A camera `distance` in front of the goal along -x, looking along +x at `aim` (world
+    /// point on the x axis' plane y = 0), tilted down by `pitch` (rad).
+    pub fn looking_along_x(distance: f64, aim_z: f64, pitch: f64, fovy: f64) -> Self {
+        let (s, c) = pitch.sin_cos();
+        Self {
+            name: "vision".into(),
+            pos: [-distance, 0.0, aim_z + distance * pitch.tan()],
+            xyaxes: [0.0, -1.0, 0.0, s, 0.0, c],
+            fovy,
+        }
+    }
+}
+
 /// A closed convex outline in a part's xy plane.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Outline {
@@ -192,6 +222,8 @@ pub struct SceneSpec {
     pub force: f64,
     /// Friction coefficient.
     pub friction: f64,
+    /// The vision camera, where the task has one (bearing housing: experiment D).
+    pub camera: Option<CameraSpec>,
 }
 
 /// A regular polygon with `n` vertices on radius `r`, the first at angle `phase`.
@@ -249,6 +281,14 @@ impl SceneSpec {
         let meshes = cad::meshes(&geometry);
         let file = |role| meshes.iter().find(|m| m.role == role).map(|m| m.file.to_owned()).unwrap_or_default();
         let reach_of = |b_radius: f64| b_radius + task.omega.size_trans * 2f64.sqrt() + 0.001;
+        let camera = match geometry {
+            // Experiment D: looking along x at the housing's and the seat's side edges,
+            // 200 mm in front, aimed between the seat's top and the housing, 8 degrees down.
+            Geometry::BearingHousing { seat_height, .. } => {
+                Some(CameraSpec::looking_along_x(0.2, seat_height + 0.002, 8f64.to_radians(), 12.0))
+            }
+            _ => None,
+        };
         let (face, pieces, top) = match geometry {
             Geometry::RoundPeg { peg_radius, hole_radius, hole_depth, block, .. } => {
                 let apothem_circ = hole_radius / (PI / HOLE_SIDES as f64).cos();
@@ -305,6 +345,7 @@ impl SceneSpec {
             sensor_origin: task.contact.sensor_origin,
             force: task.contact.force,
             friction: task.contact.friction,
+            camera,
         })
     }
 
@@ -320,6 +361,12 @@ impl SceneSpec {
         let _ = writeln!(x, "  <compiler autolimits=\"true\" angle=\"radian\" meshdir=\".\"/>");
         let _ = writeln!(x, "  <option timestep=\"0.001\" cone=\"elliptic\" gravity=\"0 0 0\"/>");
         let _ = writeln!(x, "  <size njmax=\"6000\" nconmax=\"2000\"/>");
+        if self.camera.is_some() {
+            let [w, h] = CAMERA_RESOLUTION;
+            // 256 slices: rendered cylinders' silhouettes within 1 um of the CAD circle; a strong
+            // ambient headlight keeps surfaces seen at grazing angles (silhouettes) bright.
+            let _ = writeln!(x, "  <visual><global offwidth=\"{w}\" offheight=\"{h}\"/><quality numslices=\"256\"/><headlight ambient=\"0.45 0.45 0.45\" diffuse=\"0.5 0.5 0.5\"/></visual>");
+        }
         let _ = writeln!(x, "  <default>");
         let _ = writeln!(
             x,
@@ -341,6 +388,17 @@ impl SceneSpec {
         let _ = writeln!(x, "  </asset>");
         let _ = writeln!(x, "  <worldbody>");
         let _ = writeln!(x, "    <light pos=\"0 -0.1 0.3\" dir=\"0 0.3 -1\"/>");
+        if let Some(c) = &self.camera {
+            let a: Vec<String> = c.xyaxes.iter().map(|&v| f(v)).collect();
+            let _ = writeln!(
+                x,
+                "    <camera name=\"{}\" pos=\"{}\" xyaxes=\"{}\" fovy=\"{}\"/>",
+                c.name,
+                v3(c.pos),
+                a.join(" "),
+                f(c.fovy)
+            );
+        }
         let _ = writeln!(x, "    <body name=\"part_b\" mocap=\"true\" pos=\"0 0 0\">");
         let _ = writeln!(x, "      <geom name=\"visual_b\" class=\"visual\" type=\"mesh\" mesh=\"visual_b\" rgba=\"0.45 0.5 0.6 0.5\"/>");
         for (i, p) in self.pieces.iter().enumerate() {

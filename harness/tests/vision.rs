@@ -1,0 +1,124 @@
+//! Vision (experiment D): the camera model against MuJoCo's rendering, and line detection
+//! on rendered images against the ground truth projected from the scene's geometry.
+
+use std::sync::Mutex;
+
+use ftmap::Task;
+use harness::camera::CameraScene;
+use harness::scene::{SceneSpec, scene_path};
+use harness::vision::{self, BearingGeometry, Gradient, LineParams, VisionError, detect_line};
+
+/// One offscreen GL context at a time.
+static GL: Mutex<()> = Mutex::new(());
+
+fn bearing() -> (Task, CameraScene, BearingGeometry) {
+    let task = Task::find("bearing_housing").expect("task bearing_housing");
+    let spec = SceneSpec::of_task(&task).expect("its scene description");
+    let view = CameraScene::load(&scene_path(&task), spec).expect("its committed scene with camera `vision`");
+    let geo = BearingGeometry::of_task(&task).expect("bearing geometry");
+    (task, view, geo)
+}
+
+/// Detection errors (degrees, px) of all four edges, each asserted found.
+fn errors(task: &Task, view: &mut CameraScene, geo: &BearingGeometry, object: [f64; 2], tcp_xy: [f64; 2], noise: Option<u64>) -> Vec<(String, f64, f64)> {
+    let tcp = [tcp_xy[0], tcp_xy[1], view.approach_height()];
+    view.place(object, tcp);
+    let image = view.render().expect("offscreen rendering (Mesa EGL)");
+    let cam = view.camera();
+    let mut gray = image.to_gray();
+    if let Some(seed) = noise {
+        vision::add_noise(&mut gray, 5.0, seed);
+    }
+    let results = vision::detect_bearing(&gray, &cam, geo, tcp, object, task.omega.size_trans);
+    assert_eq!(results.len(), 4, "four edges expected");
+    results
+        .into_iter()
+        .map(|r| {
+            let l = r.found.unwrap_or_else(|e| panic!("{} at object {object:?}: {e}", r.name));
+            (r.name, l.angle - r.truth.angle, l.offset - r.truth.offset)
+        })
+        .collect()
+}
+
+#[test]
+fn detected_edges_match_the_projected_geometry() {
+    let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (task, mut view, geo) = bearing();
+    let cases = [([0.0, 0.0], [0.0, 0.0]), ([0.002, -0.003], [0.0, 0.0]), ([-0.004, 0.0045], [0.0, 0.0]), ([0.001, 0.002], [0.0005, -0.001])];
+    for (k, (object, tcp)) in cases.iter().enumerate() {
+        for noise in [None, Some(k as u64 + 1)] {
+            for (name, da, doff) in errors(&task, &mut view, &geo, *object, *tcp, noise) {
+                println!("object {object:?} tcp {tcp:?} noise {noise:?} {name}: d_angle {da:.4} deg, d_offset {doff:.3} px");
+                assert!(da.abs() < 0.2, "{name} at {object:?} (noise {noise:?}): angle error {da} deg");
+                assert!(doff.abs() < 0.5, "{name} at {object:?} (noise {noise:?}): offset error {doff} px");
+            }
+        }
+    }
+}
+
+#[test]
+fn camera_model_projects_like_mujoco_renders() {
+    let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let task = Task::find("bearing_housing").expect("task");
+    let path = scene_path(&task);
+    let dir = path.parent().expect("scene folder").canonicalize().expect("absolute folder");
+    let points = [[0.0, 0.026, 0.02], [0.0, -0.026, 0.02], [0.01, 0.025, 0.025], [0.01, -0.025, 0.012]];
+    let spheres: String = points
+        .iter()
+        .map(|p| format!("<geom type=\"sphere\" size=\"0.0004\" pos=\"{} {} {}\" material=\"marker\" contype=\"0\" conaffinity=\"0\"/>", p[0], p[1], p[2]))
+        .collect();
+    let xml = std::fs::read_to_string(&path)
+        .expect("scene")
+        .replace("meshdir=\".\"", &format!("meshdir=\"{}\"", dir.display()))
+        .replace("<asset>", "<asset><material name=\"marker\" rgba=\"1 1 1 1\" emission=\"1\"/>")
+        .replace("<worldbody>", &format!("<worldbody>{spheres}"));
+    let spec = SceneSpec::of_task(&task).expect("spec");
+    let mut view = CameraScene::from_xml_string(&xml, spec).expect("scene with markers");
+    view.place([0.0, 0.0], [0.0, 0.0, view.approach_height()]);
+    let image = view.render().expect("offscreen rendering (Mesa EGL)");
+    let cam = view.camera();
+    let gray = image.to_gray();
+    for p in points {
+        let uv = cam.project(p).expect("in front of the camera");
+        let (mut sw, mut su, mut sv) = (0.0, 0.0, 0.0);
+        for v in (uv[1].round() as i64 - 12)..=(uv[1].round() as i64 + 12) {
+            for u in (uv[0].round() as i64 - 12)..=(uv[0].round() as i64 + 12) {
+                assert!(u >= 0 && v >= 0 && (u as usize) < cam.width && (v as usize) < cam.height, "marker {p:?} near the border");
+                let g = f64::from(gray[v as usize * cam.width + u as usize]);
+                if g > 8.0 {
+                    (sw, su, sv) = (sw + g, su + g * u as f64, sv + g * v as f64);
+                }
+            }
+        }
+        assert!(sw > 255.0 * 20.0, "marker {p:?} not rendered near its projection {uv:?}");
+        let (cu, cv) = (su / sw, sv / sw);
+        println!("marker {p:?}: projected ({:.3}, {:.3}), rendered centroid ({cu:.3}, {cv:.3})", uv[0], uv[1]);
+        assert!((cu - uv[0]).hypot(cv - uv[1]) < 0.5, "marker {p:?}: projected {uv:?}, rendered centroid ({cu}, {cv})");
+    }
+}
+
+#[test]
+fn no_part_in_view_gives_feature_not_found() {
+    let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (task, mut view, geo) = bearing();
+    let tcp = [0.0, 0.0, view.approach_height()];
+    view.place([0.0, 0.0], tcp);
+    let expected = geo.edges(&view.camera(), tcp, [0.0, 0.0]);
+    // Both parts moved 1 m aside: nothing in the camera's view.
+    view.place([0.0, 1.0], [0.0, 1.0, tcp[2]]);
+    let image = view.render().expect("offscreen rendering (Mesa EGL)");
+    let cam = view.camera();
+    let mut gray = image.to_gray();
+    vision::add_noise(&mut gray, 5.0, 3);
+    let grad = Gradient::sobel(cam.width, cam.height, &gray);
+    for e in &expected {
+        let ends = e.project(&cam).expect("projected");
+        let params = LineParams { band: 60.0, ..LineParams::default() };
+        match detect_line(&grad, ends, &params) {
+            Err(VisionError::FeatureNotFound(why)) => println!("{}: feature not found: {why}", e.name),
+            Ok(l) => panic!("{}: found a line in an empty view: {l:?}", e.name),
+        }
+    }
+    let results = vision::detect_bearing(&gray, &cam, &geo, tcp, [0.0, 0.0], task.omega.size_trans);
+    assert!(results.iter().all(|r| r.found.is_err()), "{results:?}");
+}
