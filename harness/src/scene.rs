@@ -363,9 +363,8 @@ impl SceneSpec {
         let _ = writeln!(x, "  <size njmax=\"6000\" nconmax=\"2000\"/>");
         if self.camera.is_some() {
             let [w, h] = CAMERA_RESOLUTION;
-            // 256 slices: rendered cylinders' silhouettes within 1 um of the CAD circle; a strong
-            // ambient headlight keeps surfaces seen at grazing angles (silhouettes) bright.
-            let _ = writeln!(x, "  <visual><global offwidth=\"{w}\" offheight=\"{h}\"/><quality numslices=\"256\"/><headlight ambient=\"0.45 0.45 0.45\" diffuse=\"0.5 0.5 0.5\"/></visual>");
+            // A strong ambient headlight keeps surfaces seen at grazing angles (silhouettes) bright.
+            let _ = writeln!(x, "  <visual><global offwidth=\"{w}\" offheight=\"{h}\"/><headlight ambient=\"0.45 0.45 0.45\" diffuse=\"0.5 0.5 0.5\"/></visual>");
         }
         let _ = writeln!(x, "  <default>");
         let _ = writeln!(
@@ -387,7 +386,10 @@ impl SceneSpec {
         }
         let _ = writeln!(x, "  </asset>");
         let _ = writeln!(x, "  <worldbody>");
-        let _ = writeln!(x, "    <light pos=\"0 -0.1 0.3\" dir=\"0 0.3 -1\"/>");
+        // Camera scenes: no cast shadows (diffuse work-cell lighting; a shadow boundary next
+        // to a silhouette would compete with it for the gradient maximum).
+        let shadow = if self.camera.is_some() { " castshadow=\"false\"" } else { "" };
+        let _ = writeln!(x, "    <light pos=\"0 -0.1 0.3\" dir=\"0 0.3 -1\"{shadow}/>");
         if let Some(c) = &self.camera {
             let a: Vec<String> = c.xyaxes.iter().map(|&v| f(v)).collect();
             let _ = writeln!(
@@ -400,16 +402,20 @@ impl SceneSpec {
             );
         }
         let _ = writeln!(x, "    <body name=\"part_b\" mocap=\"true\" pos=\"0 0 0\">");
-        let _ = writeln!(x, "      <geom name=\"visual_b\" class=\"visual\" type=\"mesh\" mesh=\"visual_b\" rgba=\"0.45 0.5 0.6 0.5\"/>");
+        // With a camera, the camera sees the CAD meshes (opaque) and not the collision pieces
+        // (group 3, hidden by default): MuJoCo draws primitives with few slices, which would
+        // move a cylinder's silhouette by a pixel.
+        let (alpha_b, hidden) = if self.camera.is_some() { ("1", " group=\"3\"") } else { ("0.5", "") };
+        let _ = writeln!(x, "      <geom name=\"visual_b\" class=\"visual\" type=\"mesh\" mesh=\"visual_b\" rgba=\"0.45 0.5 0.6 {alpha_b}\"/>");
         for (i, p) in self.pieces.iter().enumerate() {
             let _ = match p {
                 Piece::Box { center, half } => {
-                    writeln!(x, "      <geom name=\"piece{i}\" type=\"box\" pos=\"{}\" size=\"{}\" rgba=\"0.45 0.5 0.6 1\"/>", v3(*center), v3(*half))
+                    writeln!(x, "      <geom name=\"piece{i}\" type=\"box\" pos=\"{}\" size=\"{}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>", v3(*center), v3(*half))
                 }
-                Piece::Prism { .. } => writeln!(x, "      <geom name=\"piece{i}\" type=\"mesh\" mesh=\"piece{i}\" rgba=\"0.45 0.5 0.6 1\"/>"),
+                Piece::Prism { .. } => writeln!(x, "      <geom name=\"piece{i}\" type=\"mesh\" mesh=\"piece{i}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>"),
                 Piece::Cylinder { radius, z0, z1 } => writeln!(
                     x,
-                    "      <geom name=\"piece{i}\" type=\"cylinder\" pos=\"0 0 {}\" size=\"{} {}\" rgba=\"0.45 0.5 0.6 1\"/>",
+                    "      <geom name=\"piece{i}\" type=\"cylinder\" pos=\"0 0 {}\" size=\"{} {}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>",
                     f((z0 + z1) / 2.0),
                     f(*radius),
                     f((z1 - z0) / 2.0)
@@ -429,7 +435,7 @@ impl SceneSpec {
         for (i, q) in bed.iter().enumerate() {
             let _ = writeln!(
                 x,
-                "        <geom name=\"bed{i}\" type=\"sphere\" size=\"{}\" pos=\"{} {} {}\" rgba=\"0.8 0.3 0.2 1\"/>",
+                "        <geom name=\"bed{i}\" type=\"sphere\" size=\"{}\" pos=\"{} {} {}\" rgba=\"0.8 0.3 0.2 1\"{hidden}/>",
                 f(SPHERE_RADIUS),
                 f(q[0]),
                 f(q[1]),
