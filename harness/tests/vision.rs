@@ -122,3 +122,77 @@ fn no_part_in_view_gives_feature_not_found() {
     let results = vision::detect_bearing(&gray, &cam, &geo, tcp, [0.0, 0.0], task.omega.size_trans);
     assert!(results.iter().all(|r| r.found.is_err()), "{results:?}");
 }
+
+#[test]
+fn camera_model_is_mujocos_camera() {
+    let (_, mut view, _) = bearing();
+    view.place([0.0, 0.0], [0.0, 0.0, view.approach_height()]);
+    let cam = view.camera();
+    let spec = view.spec().camera.clone().expect("scene camera");
+    assert_eq!((cam.width, cam.height), (640, 480));
+    assert!((cam.fovy - spec.fovy).abs() < 1e-12);
+    assert!((cam.focal() - 240.0 / 6f64.to_radians().tan()).abs() < 1e-9);
+    for k in 0..3 {
+        assert!((cam.pos[k] - spec.pos[k]).abs() < 1e-12, "pos {:?} vs {:?}", cam.pos, spec.pos);
+        // Columns 0 and 1 of cam_xmat are the MJCF xyaxes (unit vectors here).
+        assert!((cam.xmat[3 * k] - spec.xyaxes[k]).abs() < 1e-9, "{:?}", cam.xmat);
+        assert!((cam.xmat[3 * k + 1] - spec.xyaxes[3 + k]).abs() < 1e-9, "{:?}", cam.xmat);
+    }
+    // The optical axis (-z) projects to the image centre, camera x to the right, y up.
+    let z = [cam.xmat[2], cam.xmat[5], cam.xmat[8]];
+    let at = |d: [f64; 3]| cam.project([cam.pos[0] + d[0], cam.pos[1] + d[1], cam.pos[2] + d[2]]).expect("in front");
+    let c = at([-0.2 * z[0], -0.2 * z[1], -0.2 * z[2]]);
+    assert!((c[0] - 319.5).abs() < 1e-9 && (c[1] - 239.5).abs() < 1e-9, "{c:?}");
+    let r = at([-0.2 * z[0] + 0.01 * cam.xmat[0], -0.2 * z[1] + 0.01 * cam.xmat[3], -0.2 * z[2] + 0.01 * cam.xmat[6]]);
+    assert!((r[0] - 319.5 - cam.focal() * 0.05).abs() < 1e-9 && (r[1] - 239.5).abs() < 1e-9, "{r:?}");
+    assert!(cam.project([cam.pos[0] + z[0], cam.pos[1] + z[1], cam.pos[2] + z[2]]).is_none(), "behind the camera");
+}
+
+#[test]
+fn harness_render_writes_the_image_and_the_edge_distances() {
+    let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let out = std::env::temp_dir().join(format!("harness-render-{}/d.png", std::process::id()));
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["render", "--task", "bearing_housing", "--object-mm", "1.5,-2", "--noise", "5", "--out"])
+        .arg(&out)
+        .output()
+        .expect("harness runs");
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "{text}{}", String::from_utf8_lossy(&run.stderr));
+    for want in ["housing.left", "housing.right", "seat.left", "seat.right", "vision.left_distance", "vision.right_distance"] {
+        assert!(text.contains(want), "no {want} in:\n{text}");
+    }
+    assert!(!text.contains("not found"), "{text}");
+    let decoder = mujoco_rs::renderer::png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&out).expect("image written")));
+    let info = decoder.read_info().expect("a PNG");
+    assert_eq!((info.info().width, info.info().height), (640, 480));
+    let _ = std::fs::remove_dir_all(out.parent().expect("folder"));
+    // A task without a camera is refused with a clear message.
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_harness")).args(["render", "--task", "peg_in_hole", "--out"]).arg(&out).output().expect("harness runs");
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success() && err.contains("no vision edges"), "{err}");
+}
+
+#[test]
+fn measured_edge_distances_match_the_true_ones() {
+    let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (task, mut view, geo) = bearing();
+    for object in [[0.0, 0.0], [0.003, 0.004], [-0.002, -0.0045]] {
+        let tcp = [0.0, 0.0, view.approach_height()];
+        view.place(object, tcp);
+        let image = view.render().expect("offscreen rendering (Mesa EGL)");
+        let cam = view.camera();
+        let mut gray = image.to_gray();
+        vision::add_noise(&mut gray, 5.0, 11);
+        let r = vision::detect_bearing(&gray, &cam, &geo, tcp, object, task.omega.size_trans);
+        let v = cam.project(tcp).expect("tcp in view")[1];
+        for side in ["left", "right"] {
+            let get = |n: &str| r.iter().find(|e| e.name == format!("{n}.{side}")).expect("edge");
+            let (h, s) = (get("housing"), get("seat"));
+            let measured = vision::u_distance(h.found.as_ref().expect("housing edge"), s.found.as_ref().expect("seat edge"), v);
+            let truth = vision::u_distance(&h.truth, &s.truth, v);
+            println!("object {object:?} {side}: distance {measured:.3} px, true {truth:.3} px");
+            assert!((measured - truth).abs() < 0.5, "{side} at {object:?}: {measured} vs {truth}");
+        }
+    }
+}
