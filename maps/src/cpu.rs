@@ -106,9 +106,9 @@ impl DepthBackend for CpuBackend {
             .chunk_by(|&x, &y| shifts[x].dv == shifts[y].dv)
             .flat_map(|g| g.chunks(BATCH))
             .collect();
-        let done: Vec<Vec<(usize, ContactSummary)>> = batches
+        let mut done: Vec<(usize, ContactSummary)> = batches
             .par_iter()
-            .map(|batch| {
+            .flat_map_iter(|batch| {
                 let maxima = RowMaxima::new(a, b, &rows.solid, shifts[batch[0]].dv);
                 let mut scratch = Vec::new();
                 batch
@@ -119,17 +119,11 @@ impl DepthBackend for CpuBackend {
                             summarize(a, b, &rows, &maxima, shifts[k], tolerance, &mut scratch),
                         )
                     })
-                    .collect()
+                    .collect::<Vec<_>>()
             })
             .collect();
-        let mut out: Vec<Option<ContactSummary>> = vec![None; shifts.len()];
-        for (k, summary) in done.into_iter().flatten() {
-            out[k] = Some(summary);
-        }
-        Ok(out
-            .into_iter()
-            .map(|s| s.expect("every shift is in one batch"))
-            .collect())
+        done.sort_unstable_by_key(|(k, _)| *k);
+        Ok(done.into_iter().map(|(_, summary)| summary).collect())
     }
 }
 

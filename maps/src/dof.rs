@@ -96,6 +96,22 @@ impl Dof {
     pub fn unit(self) -> &'static str {
         if self.is_rotation() { "rad" } else { "m" }
     }
+
+    /// Factor and unit of the values as people read them: mm for translations, degrees
+    /// for rotations (CLI flags, plot axes).
+    pub fn display_unit(self) -> (f64, &'static str) {
+        if self.is_rotation() {
+            (180.0 / std::f64::consts::PI, "deg")
+        } else {
+            (1e3, "mm")
+        }
+    }
+
+    /// A value in display units, e.g. `+2.500 mm` or `-0.500 deg`.
+    pub fn display(self, v: f64) -> String {
+        let (factor, unit) = self.display_unit();
+        format!("{:+.3} {unit}", v * factor)
+    }
 }
 
 impl fmt::Display for Dof {

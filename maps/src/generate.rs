@@ -317,6 +317,18 @@ impl Context<'_> {
     }
 }
 
+/// Number of configurations a computation (or shard `[i, n]` of it) computes.
+pub fn shard_configs(grid: &Grid, shard: Option<[usize; 2]>) -> usize {
+    let rotations = SubGrid::new(grid, |r| r == Role::Render).len;
+    let [i, n] = shard.unwrap_or([0, 1]);
+    let own = if i < n {
+        rotations / n + usize::from(i < rotations % n)
+    } else {
+        0
+    };
+    own * (grid.cells() / rotations.max(1))
+}
+
 /// Joins shard maps of one computation into the whole map; every shard 0..n exactly once.
 pub fn merge(parts: Vec<(FtMap, [usize; 2])>) -> Result<FtMap> {
     let mut parts = parts.into_iter();

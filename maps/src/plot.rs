@@ -47,11 +47,7 @@ pub fn slice(
             .find(|(n, _)| *n == a.dof.to_string() || *n == a.dof.axis.name())
             .map_or(0.0, |(_, v)| *v);
         idx[k] = a.nearest(want);
-        fixed.push(format!(
-            "{}={}",
-            a.dof,
-            human(a.dof.is_rotation(), a.value(idx[k]))
-        ));
+        fixed.push(format!("{}={}", a.dof, a.dof.display(a.value(idx[k]))));
     }
     for (name, _) in at {
         if !grid
@@ -78,15 +74,6 @@ pub fn slice(
         values,
         fixed: fixed.join(", "),
     })
-}
-
-/// A value in display units: mm for translations, degrees for rotations.
-fn human(rotation: bool, v: f64) -> String {
-    if rotation {
-        format!("{:.2}°", v.to_degrees())
-    } else {
-        format!("{:.2} mm", v * 1e3)
-    }
 }
 
 /// Blue-white-red for signed channels, so that zero is white.
@@ -136,15 +123,7 @@ fn draw(
     }
     let grid = map.grid();
     let (ax, ay) = (grid.axes()[s.axes[0]], grid.axes()[s.axes[1]]);
-    let scale = |rot: bool| {
-        if rot {
-            180.0 / std::f64::consts::PI
-        } else {
-            1e3
-        }
-    };
-    let (sx, sy) = (scale(ax.dof.is_rotation()), scale(ay.dof.is_rotation()));
-    let unit = |rot: bool| if rot { "deg" } else { "mm" };
+    let ((sx, ux), (sy, uy)) = (ax.dof.display_unit(), ay.dof.display_unit());
     let finite = s.values.iter().copied().filter(|v| v.is_finite());
     let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
         (a.min(v), b.max(v))
@@ -202,8 +181,8 @@ fn draw(
         .disable_mesh()
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
-        .x_desc(format!("{} [{}]", ax.dof, unit(ax.dof.is_rotation())))
-        .y_desc(format!("{} [{}]", ay.dof, unit(ay.dof.is_rotation())))
+        .x_desc(format!("{} [{ux}]", ax.dof))
+        .y_desc(format!("{} [{uy}]", ay.dof))
         .draw()?;
     chart.draw_series(
         (0..ay.count)

@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use ftmap::depth::DepthBackend;
-use ftmap::generate::{GenerateOptions, generate, merge};
+use ftmap::generate::{GenerateOptions, generate, merge, shard_configs};
 use ftmap::{CHANNELS, FtMap, Task, UNITS, WrenchModel, cad, format, plot};
 
 #[derive(Parser)]
@@ -191,11 +191,8 @@ fn cmd_generate(
     let task = Task::find(task)?;
     let backend = make_backend(kind, require_gpu)?;
     let grid = task.grid()?;
-    let total = match shard {
-        None => grid.cells() as u64,
-        Some(_) => 0,
-    };
-    let bar = ProgressBar::new(total).with_style(
+    let total = shard_configs(&grid, shard);
+    let bar = ProgressBar::new(total as u64).with_style(
         ProgressStyle::with_template(
             "{spinner} {msg} [{bar:40}] {human_pos}/{human_len} configs, {per_sec}, eta {eta}",
         )
@@ -212,31 +209,18 @@ fn cmd_generate(
     )?;
     let secs = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    let done = map
-        .data()
-        .chunks_exact(ftmap::NCH)
-        .filter(|c| !c[0].is_nan())
-        .count();
     format::write_bytes(&format::encode(&map, shard), out)?;
     println!(
         "{}: {} configs in {:.2} s = {:.0} configs/s ({}, {:?} model) -> {}",
         task.name,
-        done,
+        total,
         secs,
-        done as f64 / secs,
+        total as f64 / secs,
         backend.name(),
         model,
         out.display()
     );
     Ok(())
-}
-
-fn human_axis(rot: bool, v: f64) -> String {
-    if rot {
-        format!("{:+.3}°", v.to_degrees())
-    } else {
-        format!("{:+.3} mm", v * 1e3)
-    }
 }
 
 fn cmd_info(file: &Path) -> Result<()> {
@@ -268,13 +252,12 @@ fn cmd_info(file: &Path) -> Result<()> {
     }
     println!("grid       {} axes, {} cells", g.ndim(), g.cells());
     for a in g.axes() {
-        let rot = a.dof.is_rotation();
         println!(
             "  {:<10} {} .. {} step {} ({} samples)",
             a.dof.to_string(),
-            human_axis(rot, a.min),
-            human_axis(rot, a.max()),
-            human_axis(rot, a.step).trim_start_matches('+'),
+            a.dof.display(a.min),
+            a.dof.display(a.max()),
+            a.dof.display(a.step).trim_start_matches('+'),
             a.count
         );
     }
@@ -357,16 +340,7 @@ fn cmd_plot(
     // --at is given in mm and degrees: convert to SI.
     let at_si = at
         .iter()
-        .map(|(name, v)| {
-            Ok((
-                name.clone(),
-                if g.axes()[find(name)?].dof.is_rotation() {
-                    v.to_radians()
-                } else {
-                    v * 1e-3
-                },
-            ))
-        })
+        .map(|(name, v)| Ok((name.clone(), v / g.axes()[find(name)?].dof.display_unit().0)))
         .collect::<Result<Vec<_>>>()?;
     plot::heat_map(&map, channel, axes, &at_si, out)?;
     println!("{} -> {}", channel, out.display());
