@@ -102,6 +102,14 @@ pub enum MapError {
     /// A rendering that does not fit the configuration (e.g. no overlap of the parts).
     #[error("geometry: {0}")]
     Geometry(String),
+    /// A vision model file that is missing, unreadable or invalid.
+    #[error("vision model {}: {reason}", path.display())]
+    Vision {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
 }
 
 /// Result with [`MapError`].

@@ -4,6 +4,8 @@
 //! grip translations only move the sensor origin. The contacts of each configuration are
 //! reduced by the backend and turned into a wrench by the chosen model.
 
+use std::path::{Path, PathBuf};
+
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 
@@ -105,6 +107,47 @@ pub fn generate(
     let mesh_a = Mesh::load(&task.part_a.mesh)?;
     let mesh_b = Mesh::load(&task.part_b.mesh)?;
     generate_with(task, &mesh_a, &mesh_b, backend, opts, progress)
+}
+
+/// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
+/// it is kept under the hash of the task file, its meshes and this crate's version;
+/// computed and stored when missing or unreadable. Returns the file and whether it was
+/// computed now.
+///
+/// # Errors
+/// When the task's files cannot be read, the map cannot be computed or stored.
+pub fn cached(task: &Task, dir: &Path) -> Result<(PathBuf, bool)> {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    for f in [&task.path, &task.part_a.mesh, &task.part_b.mesh] {
+        h.update(std::fs::read(f).map_err(|source| MapError::Io {
+            path: f.clone(),
+            source,
+        })?);
+    }
+    h.update(env!("CARGO_PKG_VERSION"));
+    let hash: String = h
+        .finalize()
+        .iter()
+        .take(8)
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let path = dir.join(format!("{}-{hash}.ftmap", task.name));
+    if path.is_file() && crate::format::load(&path).is_ok() {
+        return Ok((path, false));
+    }
+    std::fs::create_dir_all(dir).map_err(|source| MapError::Io {
+        path: dir.to_owned(),
+        source,
+    })?;
+    let map = generate(
+        task,
+        &crate::cpu::CpuBackend,
+        &GenerateOptions::default(),
+        &|_| {},
+    )?;
+    crate::format::save(&map, &path)?;
+    Ok((path, true))
 }
 
 /// Computes the FT-Map of `task` for given meshes of A and B (instead of its mesh files).

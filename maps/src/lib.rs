@@ -17,6 +17,7 @@ pub mod map;
 pub mod mesh;
 pub mod plot;
 pub mod task;
+pub mod vision;
 pub mod wrench;
 
 pub use dof::{Axis, Dof, Pose};

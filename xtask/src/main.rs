@@ -9,7 +9,6 @@ use std::process::Command;
 
 use anyhow::{Context, Result, bail};
 use model_description::{Causality, Start, VARIABLES};
-use sha2::{Digest, Sha256};
 
 /// The task whose map the FMU carries by default.
 const DEFAULT_TASK: &str = "peg_in_hole";
@@ -115,34 +114,18 @@ fn fmu() -> Result<()> {
 fn default_map(cache: &Path) -> Result<PathBuf> {
     let task =
         ftmap::Task::find(DEFAULT_TASK).with_context(|| format!("loading task {DEFAULT_TASK}"))?;
-    let mut h = Sha256::new();
-    for f in [&task.path, &task.part_a.mesh, &task.part_b.mesh] {
-        h.update(std::fs::read(f).with_context(|| format!("reading {}", f.display()))?);
-    }
-    h.update(env!("CARGO_PKG_VERSION"));
-    let hash: String = h
-        .finalize()
-        .iter()
-        .take(8)
-        .map(|b| format!("{b:02x}"))
-        .collect();
-    let path = cache.join(format!("{DEFAULT_TASK}-{hash}.ftmap"));
-    if path.is_file() && ftmap::format::load(&path).is_ok() {
-        println!("xtask fmu: map {} (cached)", path.display());
-        return Ok(path);
-    }
-    println!("xtask fmu: computing the {DEFAULT_TASK} map (CPU backend)");
     let t0 = std::time::Instant::now();
-    let map =
-        ftmap::generate::generate(&task, &ftmap::cpu::CpuBackend, &Default::default(), &|_| {})
-            .with_context(|| format!("computing the {DEFAULT_TASK} map"))?;
-    ftmap::format::save(&map, &path).with_context(|| format!("saving {}", path.display()))?;
-    println!(
-        "xtask fmu: {} cells in {:.1} s -> {}",
-        map.grid().cells(),
-        t0.elapsed().as_secs_f64(),
-        path.display()
-    );
+    let (path, computed) = ftmap::generate::cached(&task, cache)
+        .with_context(|| format!("computing the {DEFAULT_TASK} map"))?;
+    let how = if computed {
+        format!(
+            "computed in {:.1} s (CPU backend)",
+            t0.elapsed().as_secs_f64()
+        )
+    } else {
+        "cached".to_owned()
+    };
+    println!("xtask fmu: map {} ({how})", path.display());
     Ok(path)
 }
 
