@@ -25,6 +25,14 @@ pub enum FusionError {
         /// What is wrong.
         reason: String,
     },
+    /// The vision model file is missing, unreadable or invalid.
+    #[error("vision model {}: {reason}", path.display())]
+    Vision {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// A measurement with NaN or infinite values.
     #[error("input `{name}` is {value}: measurement skipped")]
     NonFinite {

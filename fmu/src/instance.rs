@@ -9,13 +9,13 @@ use ftmap::{Axis, Dof, MapError, Pose};
 use model_description::{Causality, VARIABLES, VarType};
 
 use crate::error::{FusionError, Result};
-use crate::filter::{Filter, Measurement, Reader, Writer};
+use crate::filter::{Filter, Measurement, Reader, VisionMeasurement, VisionSense, Writer};
 use crate::params::{Params, Store, Value, index_of, index_of_vr};
 
 /// First bytes of a saved FMU state.
 pub const STATE_MAGIC: [u8; 8] = *b"FTFSTATE";
-/// Version of the saved-state layout.
-pub const STATE_VERSION: u32 = 1;
+/// Version of the saved-state layout (2: the `vision.valid` edge).
+pub const STATE_VERSION: u32 = 2;
 
 /// FMI 2.0 status of a call.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -147,6 +147,9 @@ struct Io {
     wrench: [usize; 6],
     tcp: [usize; 6],
     contact: usize,
+    /// vision.left_distance, right_distance, passive_left, passive_right.
+    vision: [usize; 4],
+    vision_valid: usize,
     /// Estimate and spread outputs by full DOF index (grip x..rz, object x..rz).
     pose: [usize; 12],
     std: [usize; 12],
@@ -164,6 +167,14 @@ impl Io {
             wrench: ["fx", "fy", "fz", "tx", "ty", "tz"].map(|c| index_of(&format!("wrench.{c}"))),
             tcp: ["x", "y", "z", "rx", "ry", "rz"].map(|c| index_of(&format!("tcp.{c}"))),
             contact: index_of("contact"),
+            vision: [
+                "left_distance",
+                "right_distance",
+                "passive_left",
+                "passive_right",
+            ]
+            .map(|c| index_of(&format!("vision.{c}"))),
+            vision_valid: index_of("vision.valid"),
             pose: std::array::from_fn(|i| index_of(&dof(i).to_string())),
             std: std::array::from_fn(|i| index_of(&format!("{}_std", dof(i)))),
             confidence: index_of("confidence"),
@@ -186,6 +197,7 @@ pub struct Instance {
     store: Store,
     filter: Option<Filter>,
     prev_contact: bool,
+    prev_valid: bool,
     time: f64,
     io: Io,
 }
@@ -212,6 +224,7 @@ impl Instance {
             store: Store::default(),
             filter: None,
             prev_contact: false,
+            prev_valid: false,
             time: 0.0,
             io: Io::new(),
         }
@@ -260,7 +273,12 @@ impl Instance {
         match r {
             Ok(s) => s,
             Err(e) => {
-                if matches!(e, FusionError::Parameter { .. } | FusionError::Map { .. }) {
+                if matches!(
+                    e,
+                    FusionError::Parameter { .. }
+                        | FusionError::Map { .. }
+                        | FusionError::Vision { .. }
+                ) {
                     self.mode = Mode::Error;
                 }
                 self.log(
@@ -310,19 +328,19 @@ impl Instance {
         Ok(Status::Ok)
     }
 
-    /// The file the `map` parameter names: absolute, or in the resources folder.
-    fn map_path(&self, map: &str) -> Result<PathBuf> {
-        let given = Path::new(map);
+    /// The file a file parameter (`map`, `vision`) names: absolute, or in the resources
+    /// folder; the error names the file and why.
+    fn resource_path(&self, name: &str) -> std::result::Result<PathBuf, (PathBuf, String)> {
+        let given = Path::new(name);
         if given.is_absolute() {
             return Ok(given.to_owned());
         }
         match &self.resources {
             Some(dir) => Ok(dir.join(given)),
-            None => Err(FusionError::Map {
-                path: given.to_owned(),
-                reason: "a relative map name needs the FMU's resources location, which the importer did not give"
-                    .into(),
-            }),
+            None => Err((
+                given.to_owned(),
+                "a relative file name needs the FMU's resources location, which the importer did not give".into(),
+            )),
         }
     }
 
@@ -330,7 +348,9 @@ impl Instance {
     pub fn exit_initialization_mode(&mut self) -> Result<Status> {
         self.check(Call::ExitInitializationMode)?;
         let params = Params::from_store(&self.store)?;
-        let path = self.map_path(&params.map)?;
+        let path = self
+            .resource_path(&params.map)
+            .map_err(|(path, reason)| FusionError::Map { path, reason })?;
         let map = ftmap::format::load(&path).map_err(|e| FusionError::Map {
             path: path.clone(),
             reason: match e {
@@ -338,7 +358,34 @@ impl Instance {
                 other => other.to_string(),
             },
         })?;
-        let filter = Filter::new(&map, &path, params.config)?;
+        let mut filter = Filter::new(&map, &path, params.config)?;
+        if let Some(name) = &params.vision {
+            let vision_err = |(path, reason)| FusionError::Vision { path, reason };
+            let file = self.resource_path(name).map_err(vision_err)?;
+            let model = ftmap::vision::VisionModel::load(&file).map_err(|e| match e {
+                MapError::Vision { path, reason } => FusionError::Vision { path, reason },
+                other => FusionError::Vision {
+                    path: file.clone(),
+                    reason: other.to_string(),
+                },
+            })?;
+            let sense = VisionSense::new(
+                model,
+                params.vision_method,
+                params.sigma_vision,
+                filter.lookup(),
+            );
+            filter = filter.with_vision(sense);
+            self.log(
+                Status::Ok,
+                "logFilter",
+                &format!(
+                    "vision model {} ({:?})",
+                    file.display(),
+                    params.vision_method
+                ),
+            );
+        }
         let dofs: Vec<String> = filter
             .lookup()
             .axes()
@@ -376,6 +423,7 @@ impl Instance {
         self.store = Store::default();
         self.filter = None;
         self.prev_contact = false;
+        self.prev_valid = false;
         self.time = 0.0;
         Ok(Status::Ok)
     }
@@ -474,7 +522,9 @@ impl Instance {
         Ok(status)
     }
 
-    /// fmi2DoStep: takes a measurement when `contact` rose since the last step.
+    /// fmi2DoStep: takes a measurement when `contact` rose since the last step (with the
+    /// image's detections when `vision.valid` is set), or an image alone when `vision.valid`
+    /// rose while `contact` is false.
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<Status> {
         self.check(Call::DoStep)?;
         if !(h >= 0.0 && h.is_finite() && t.is_finite()) {
@@ -483,15 +533,24 @@ impl Instance {
             )));
         }
         let contact = self.store.boolean(self.io.contact);
+        let valid = self.store.boolean(self.io.vision_valid);
         let rising = contact && !self.prev_contact;
+        let image_alone = valid && !self.prev_valid && !contact;
         self.prev_contact = contact;
+        self.prev_valid = valid;
         self.time = t + h;
-        if !rising {
+        if !(rising || image_alone) {
             return Ok(Status::Ok);
         }
+        let v = self.io.vision.map(|i| self.store.real(i));
         let m = Measurement {
             wrench: self.io.wrench.map(|i| self.store.real(i)),
             tcp: self.io.tcp.map(|i| self.store.real(i)),
+            vision: valid.then_some(VisionMeasurement {
+                distances: [v[0], v[1]],
+                passive: [v[2], v[3]],
+            }),
+            vision_only: image_alone,
         };
         let Some(filter) = self.filter.as_mut() else {
             return Err(FusionError::IllegalCall {
@@ -520,6 +579,22 @@ impl Instance {
                         e.clusters
                     ),
                 );
+                if report.vision_unused {
+                    let why = if self.filter.as_ref().is_some_and(|f| f.vision().is_some()) {
+                        "no camera displacement fits the passive part's detected edges (vision_method 1)"
+                    } else {
+                        "no vision model is loaded (parameter `vision` is empty)"
+                    };
+                    self.log(
+                        Status::Warning,
+                        "logStatusWarning",
+                        &format!(
+                            "t = {}: vision.valid is set but the image was not used: {why}",
+                            self.time
+                        ),
+                    );
+                    return Ok(Status::Warning);
+                }
                 if report.respread > 0 {
                     self.log(
                         Status::Warning,
@@ -571,6 +646,7 @@ impl Instance {
         w.bytes(model_description::guid().as_bytes());
         self.store.save(&mut w);
         w.u32(u32::from(self.prev_contact));
+        w.u32(u32::from(self.prev_valid));
         w.f64(self.time);
         w.u32(u32::from(self.filter.is_some()));
         if let Some(f) = &self.filter {
@@ -586,6 +662,7 @@ impl Instance {
         let mut r = Self::state_header(bytes)?;
         let store = Store::restore(&mut r)?;
         let prev_contact = r.u32()? != 0;
+        let prev_valid = r.u32()? != 0;
         let time = r.f64()?;
         let has_filter = r.u32()? != 0;
         match (&mut self.filter, has_filter) {
@@ -628,6 +705,7 @@ impl Instance {
         }
         self.store = store;
         self.prev_contact = prev_contact;
+        self.prev_valid = prev_valid;
         self.time = time;
         Ok(Status::Ok)
     }

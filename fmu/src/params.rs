@@ -5,6 +5,7 @@ use model_description::{Start, VARIABLES, VarType, Variable};
 
 use crate::error::{FusionError, Result};
 use crate::filter::{Config, Interpolation};
+use ftmap::vision::VisionMethod;
 
 /// The value of one variable.
 #[derive(Debug, Clone, PartialEq)]
@@ -138,6 +139,12 @@ impl Store {
 pub struct Params {
     /// The `map` parameter as given.
     pub map: String,
+    /// The `vision` parameter (`None`: empty, no vision).
+    pub vision: Option<String>,
+    /// `sigma_vision` (px).
+    pub sigma_vision: f64,
+    /// `vision_method`.
+    pub vision_method: VisionMethod,
     /// The filter settings.
     pub config: Config,
 }
@@ -196,7 +203,21 @@ impl Params {
                 range: "a file name in the resources folder or an absolute path".into(),
             });
         }
-        Ok(Self { map, config })
+        let vision =
+            Some(store.string(index_of("vision")).trim().to_owned()).filter(|v| !v.is_empty());
+        let sigma_vision = checked(store, "sigma_vision")?;
+        let vision_method = if checked(store, "vision_method")? == 0.0 {
+            VisionMethod::Relative
+        } else {
+            VisionMethod::Recalibration
+        };
+        Ok(Self {
+            map,
+            config,
+            vision,
+            sigma_vision,
+            vision_method,
+        })
     }
 }
 

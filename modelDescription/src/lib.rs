@@ -18,12 +18,14 @@ pub const MODEL_IDENTIFIER: &str = "FtFusion";
 /// The FMI version the FMU implements.
 pub const FMI_VERSION: &str = "2.0";
 
-/// Units used by the variables: (name, exponents of kg, m, s, rad).
-pub const UNITS: [(&str, [i32; 4]); 4] = [
+/// Units used by the variables: (name, exponents of kg, m, s, rad); `px` (image pixels)
+/// is dimensionless.
+pub const UNITS: [(&str, [i32; 4]); 5] = [
     ("m", [0, 1, 0, 0]),
     ("rad", [0, 0, 0, 1]),
     ("N", [1, 1, -2, 0]),
     ("N.m", [1, 2, -2, 0]),
+    ("px", [0, 0, 0, 0]),
 ];
 
 /// Log categories the FMU knows, with what each reports.

@@ -2,8 +2,7 @@
 //! and the FMU checks against (value reference, type, causality, range).
 //!
 //! Value references: parameters 1xx, inputs 2xx, outputs 3xx. Vision parameters and
-//! feature inputs (a later issue) take the reserved ranges [`VISION_PARAMETER_VRS`] and
-//! [`VISION_INPUT_VRS`].
+//! feature inputs take the ranges [`VISION_PARAMETER_VRS`] and [`VISION_INPUT_VRS`].
 
 use std::ops::Range;
 
@@ -93,9 +92,9 @@ pub struct Variable {
     pub description: &'static str,
 }
 
-/// Value references kept free for the vision parameters (`sigma_vision`, ...).
+/// Value references of the vision parameters (`vision`, `sigma_vision`, ...).
 pub const VISION_PARAMETER_VRS: Range<u32> = 150..200;
-/// Value references kept free for the vision feature inputs.
+/// Value references of the vision feature inputs (`vision.*`).
 pub const VISION_INPUT_VRS: Range<u32> = 250..300;
 
 const fn param(
@@ -271,6 +270,35 @@ pub const VARIABLES: &[Variable] = &[
         "Map lookup: 0 nearest cell, 1 multilinear",
     ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
+    param(
+        "vision",
+        150,
+        VarType::String,
+        Start::String(""),
+        "",
+        [None, None],
+        "Vision model file (*.vision.json: camera and CAD features): a name in the FMU's \
+         resources folder or an absolute path; empty: no vision",
+    ),
+    param(
+        "sigma_vision",
+        151,
+        Real,
+        Start::Real(0.5),
+        "px",
+        [Some(1e-6), Some(1e6)],
+        "Standard deviation of a measured feature distance or edge column",
+    ),
+    param(
+        "vision_method",
+        152,
+        Integer,
+        Start::Integer(1),
+        "",
+        [Some(0.0), Some(1.0)],
+        "Particle evaluation by vision: 0 relative feature distances (III-B-1), \
+         1 camera recalibration on the passive part (III-B-2)",
+    ),
     // ---- Inputs (2xx) -------------------------------------------------------------------
     input(
         "wrench.fx",
@@ -358,6 +386,45 @@ pub const VARIABLES: &[Variable] = &[
         description: "The wrench is a settled contact; a measurement is taken on its rising edge",
     },
     // ---- Vision feature inputs (reserved: VISION_INPUT_VRS, 250..299) -------------------
+    input(
+        "vision.left_distance",
+        250,
+        "px",
+        "Detected distance along u, at the image's centre row, from the active part's left \
+         edge to the passive part's left edge",
+    ),
+    input(
+        "vision.right_distance",
+        251,
+        "px",
+        "Detected distance along u from the active part's right edge to the passive part's right edge",
+    ),
+    input(
+        "vision.passive_left",
+        252,
+        "px",
+        "Detected column (u) of the passive part's left edge at the centre row (vision_method 1)",
+    ),
+    input(
+        "vision.passive_right",
+        253,
+        "px",
+        "Detected column (u) of the passive part's right edge at the centre row (vision_method 1)",
+    ),
+    Variable {
+        name: "vision.valid",
+        vr: 254,
+        causality: Causality::Input,
+        variability: Variability::Discrete,
+        initial: Initial::Exact,
+        ty: Boolean,
+        start: Start::Boolean(false),
+        unit: "",
+        min: None,
+        max: None,
+        description: "The vision inputs hold a detection: used by the next contact measurement, \
+                      or alone on its rising edge while contact is false",
+    },
     // ---- Outputs (3xx) ------------------------------------------------------------------
     output(
         "object.x",
@@ -552,7 +619,13 @@ mod tests {
                 Causality::Output => 300..400,
             };
             assert!(group.contains(&v.vr), "{} vr {}", v.name, v.vr);
-            assert!(!VISION_PARAMETER_VRS.contains(&v.vr) && !VISION_INPUT_VRS.contains(&v.vr));
+            let vision = v.name.starts_with("vision") || v.name == "sigma_vision";
+            let reserved = VISION_PARAMETER_VRS.contains(&v.vr) || VISION_INPUT_VRS.contains(&v.vr);
+            assert_eq!(
+                vision, reserved,
+                "{} vr {}: vision variables and only they take the vision ranges",
+                v.name, v.vr
+            );
         }
     }
 

@@ -35,6 +35,7 @@ fn main() -> anyhow::Result<()> {
     let m = Measurement {
         wrench: [w[0], w[1], w[2], w[3], w[4], w[5]].map(f64::from),
         tcp: [0.0, 0.0, f64::from(w[6]), 0.0, 0.0, 0.0],
+        ..Measurement::default()
     };
     for (name, interpolation) in [
         ("multilinear", Interpolation::Multilinear),

@@ -5,13 +5,15 @@
 //! Particles live in grid units of the map's axes (`(x - min) / step`), axis-major. A
 //! particle holds its own pose (object pose relative to the nominal goal, grip offset);
 //! its map coordinate for an `object.*` DOF is its pose minus the TCP pose (Algorithm 1,
-//! step 13), `grip.*` DOFs are not moved by the TCP.
+//! step 13), `grip.*` DOFs are not moved by the TCP. With a vision model, Eq. 3 also holds
+//! the image features' residuals (module `vision`).
 
 mod estimate;
 mod lookup;
 mod noise;
 mod resample;
 mod state;
+mod vision;
 
 use std::path::Path;
 use std::sync::Arc;
@@ -24,6 +26,7 @@ use rand_xoshiro::rand_core::{Rng, SeedableRng};
 pub use estimate::Estimate;
 pub use lookup::{Interpolation, LANES, Lookup, MapAxis};
 pub use state::{Reader, Writer};
+pub use vision::{Prepared, VisionMeasurement, VisionSense};
 
 use crate::error::{FusionError, Result};
 
@@ -75,13 +78,17 @@ impl Default for Config {
     }
 }
 
-/// One contact measurement: the wrench in the sensor frame and the TCP pose.
+/// One measurement: the wrench in the sensor frame, the TCP pose, and an image's detections.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Measurement {
     /// fx fy fz (N), tx ty tz (N.m).
     pub wrench: [f64; 6],
     /// Task frame relative to the nominal goal: x y z (m), rx ry rz (rad).
     pub tcp: [f64; 6],
+    /// Detected image features, when an image was taken.
+    pub vision: Option<VisionMeasurement>,
+    /// No contact: only the image is evaluated (the wrench is ignored).
+    pub vision_only: bool,
 }
 
 /// What a measurement update did, beyond the new estimate.
@@ -91,6 +98,8 @@ pub struct Report {
     pub respread: u32,
     /// Iterations that resampled (ESS <= N/2).
     pub resampled: u32,
+    /// The image was not used: no vision model, or no camera recalibration fits it.
+    pub vision_unused: bool,
 }
 
 /// The particle filter over one map.
@@ -98,6 +107,7 @@ pub struct Report {
 pub struct Filter {
     lookup: Arc<Lookup>,
     cfg: Config,
+    vision: Option<Arc<VisionSense>>,
     /// Grid coordinates, axis-major: `pos[k * n + i]`.
     pos: Vec<f32>,
     /// Normalised log weights (sum of exp = 1).
@@ -130,6 +140,7 @@ impl Filter {
         let mut f = Self {
             lookup,
             cfg,
+            vision: None,
             pos: vec![0.0; n * d],
             lw: vec![-(n as f32).ln(); n],
             rng: Xoshiro256PlusPlus::seed_from_u64(cfg.seed),
@@ -147,6 +158,17 @@ impl Filter {
         }
         f.estimate = Estimate::compute(&f.lookup, &f.cfg, &f.pos, &f.lw);
         f
+    }
+
+    /// The filter weighing images too, with `sense` (the vision model on this map's axes).
+    pub fn with_vision(mut self, sense: VisionSense) -> Self {
+        self.vision = Some(Arc::new(sense));
+        self
+    }
+
+    /// The vision model, when images are weighed.
+    pub fn vision(&self) -> Option<&VisionSense> {
+        self.vision.as_deref()
     }
 
     /// The prepared map.
@@ -190,6 +212,22 @@ impl Filter {
 
     /// Checks a measurement: every value finite.
     pub fn check(m: &Measurement) -> Result<()> {
+        const VISION: [&str; 4] = [
+            "vision.left_distance",
+            "vision.right_distance",
+            "vision.passive_left",
+            "vision.passive_right",
+        ];
+        if let Some(v) = &m.vision
+            && let Some((&value, name)) = v
+                .distances
+                .iter()
+                .chain(&v.passive)
+                .zip(VISION)
+                .find(|(v, _)| !v.is_finite())
+        {
+            return Err(FusionError::NonFinite { name, value });
+        }
         const NAMES: [&str; 12] = [
             "wrench.fx",
             "wrench.fy",
@@ -216,11 +254,23 @@ impl Filter {
         }
     }
 
-    /// Takes one contact measurement: `iterations` rounds of weight (Eq. 3), normalise,
-    /// resample (when ESS <= N/2) and jitter, then a new estimate. A measurement with a
-    /// non-finite value is refused and changes nothing.
+    /// Takes one measurement: `iterations` rounds of jitter (but before the filter's first
+    /// weighing), weight (Eq. 3), normalise and resample (when ESS <= N/2), then a new
+    /// estimate. A measurement with a non-finite
+    /// value is refused and changes nothing; so is an image alone that cannot be used.
     pub fn measure(&mut self, m: &Measurement) -> Result<Report> {
         Self::check(m)?;
+        let vision = match (&self.vision, &m.vision) {
+            (Some(sense), Some(v)) => sense.prepare(v, &m.tcp),
+            _ => None,
+        };
+        let mut report = Report {
+            vision_unused: m.vision.is_some() && vision.is_none(),
+            ..Report::default()
+        };
+        if m.vision_only && vision.is_none() {
+            return Ok(report);
+        }
         let c = &self.cfg;
         let use_depth = c.sigma_depth > 0.0 && self.lookup.has_depth();
         let mut meas = [0.0f32; LANES];
@@ -238,35 +288,58 @@ impl Filter {
             0.0
         };
         let inv_var = [vf, vf, vf, vt, vt, vt, vd, 0.0];
-        let shift = self.lookup.tcp_shift(&m.tcp);
-        let mut report = Report::default();
-        for _ in 0..self.cfg.iterations {
-            let ess = self.weigh(&shift, &meas, &inv_var, &mut report);
+        let evidence = Evidence {
+            shift: self.lookup.tcp_shift(&m.tcp),
+            meas,
+            inv_var,
+            force: !m.vision_only,
+            vision,
+        };
+        for it in 0..self.cfg.iterations {
+            // Condensation order: predict (jitter) before each weighing but the very first,
+            // so that the estimate below reads the weighed set (Algorithm 1, step 13), not
+            // the set diffused for the next iteration.
+            if it > 0 || self.measurements > 0 {
+                self.jitter();
+            }
+            let ess = self.weigh(&evidence, &mut report);
             if ess <= self.cfg.particles as f64 / 2.0 {
                 self.resample();
                 report.resampled += 1;
             }
-            self.jitter();
         }
         self.measurements += 1;
         self.estimate = Estimate::compute(&self.lookup, &self.cfg, &self.pos, &self.lw);
         Ok(report)
     }
 
+    /// Each particle's log-likelihood of `ev` (Eq. 3: map residuals, image residuals) into `ll`.
+    fn log_likelihood(&self, ev: &Evidence, ll: &mut [f32]) {
+        if ev.force {
+            self.lookup.log_likelihood(
+                self.cfg.interpolation,
+                &self.pos,
+                &ev.shift,
+                &ev.meas,
+                &ev.inv_var,
+                ll,
+            );
+        } else {
+            ll.fill(0.0);
+        }
+        if let (Some(sense), Some(p)) = (&self.vision, &ev.vision) {
+            let n = self.cfg.particles;
+            let axes = self.lookup.axes();
+            sense.add_log_likelihood(p, n, |k, i| axes[k].value(self.pos[k * n + i]), ll);
+        }
+    }
+
     /// Multiplies the weights by the likelihood and normalises (log-sum-exp); re-spreads a
     /// share of the particles when every likelihood underflows. Returns the ESS and leaves
     /// the linear weights in `scratch.w`.
-    fn weigh(
-        &mut self,
-        shift: &[f32],
-        meas: &[f32; LANES],
-        inv_var: &[f32; LANES],
-        report: &mut Report,
-    ) -> f64 {
-        let interp = self.cfg.interpolation;
+    fn weigh(&mut self, ev: &Evidence, report: &mut Report) -> f64 {
         let mut ll = std::mem::take(&mut self.scratch.ll);
-        self.lookup
-            .log_likelihood(interp, &self.pos, shift, meas, inv_var, &mut ll);
+        self.log_likelihood(ev, &mut ll);
         let best = ll.iter().copied().fold(f32::NEG_INFINITY, f32::max);
         // NaN cannot occur (inputs are checked finite); `best` is -inf only for no particle.
         if best < UNDERFLOW {
@@ -279,8 +352,7 @@ impl Filter {
             for i in (offset..n).step_by(step) {
                 self.spread(i);
             }
-            self.lookup
-                .log_likelihood(interp, &self.pos, shift, meas, inv_var, &mut ll);
+            self.log_likelihood(ev, &mut ll);
             self.lw.fill(0.0);
         }
         for (w, l) in self.lw.iter_mut().zip(&ll) {
@@ -324,6 +396,20 @@ impl Filter {
             noise::jitter(&mut self.rng, &mut self.pos[k * n..(k + 1) * n], s, top);
         }
     }
+}
+
+/// What one measurement offers the particles, ready for every iteration.
+struct Evidence {
+    /// TCP shift of each map axis (grid units).
+    shift: Vec<f32>,
+    /// Measured channels, padded.
+    meas: [f32; LANES],
+    /// Inverse variances of the channels (0: unused).
+    inv_var: [f32; LANES],
+    /// The wrench counts (a contact).
+    force: bool,
+    /// The image's detections, prepared.
+    vision: Option<Prepared>,
 }
 
 /// A uniform number in [0, 1).

@@ -17,6 +17,14 @@ fn resources() -> PathBuf {
     let at = bytes.len() / 2;
     bytes[at] ^= 0x40;
     std::fs::write(dir.join("corrupt.ftmap"), bytes).expect("write corrupt map");
+    crate::synthetic::bearing_vision()
+        .save(&dir.join("bearing.vision.json"))
+        .expect("write vision model");
+    std::fs::write(
+        dir.join("broken.vision.json"),
+        "{\"kind\": \"ftfusion-vision\"",
+    )
+    .expect("write broken vision model");
     dir
 }
 
@@ -284,4 +292,103 @@ fn a_restored_state_replays_the_same_outputs_and_foreign_bytes_are_refused() {
         ),
         first
     );
+}
+
+fn set_bool(i: &mut Instance, name: &str, v: bool) {
+    i.set(VarType::Boolean, &[vr(name)], vec![Value::Boolean(v)])
+        .expect("input");
+}
+
+#[test]
+fn missing_and_broken_vision_models_fail_initialization_naming_the_file() {
+    for (name, problem) in [
+        ("nothere.vision.json", "No such file"),
+        ("broken.vision.json", "not a vision model"),
+    ] {
+        let (mut i, _) = instance();
+        set_string(&mut i, "map", "peg.ftmap").expect("parameter");
+        set_string(&mut i, "vision", name).expect("parameter");
+        i.enter_initialization_mode().expect("allowed");
+        let e = i.exit_initialization_mode().expect_err("bad vision model");
+        assert!(matches!(e, FusionError::Vision { .. }), "{e}");
+        let e = e.to_string();
+        assert!(e.contains(name) && e.contains(problem), "{e}");
+    }
+}
+
+#[test]
+fn an_image_alone_is_measured_on_the_rising_edge_of_vision_valid() {
+    let (mut i, log) = instance();
+    set_string(&mut i, "map", "peg.ftmap").expect("parameter");
+    set_string(&mut i, "vision", "bearing.vision.json").expect("parameter");
+    i.enter_initialization_mode().expect("allowed");
+    i.exit_initialization_mode()
+        .expect("valid parameters, map and vision model");
+    let model = crate::synthetic::bearing_vision();
+    let (truth, tcp) = ([1.0e-3, -2.0e-3, 0.0], [0.0, 0.0, 0.02]);
+    let d = model.distances(tcp, truth).expect("in view");
+    let p = model
+        .passive
+        .columns(&model.camera, truth)
+        .expect("in view");
+    let names = [
+        "vision.left_distance",
+        "vision.right_distance",
+        "vision.passive_left",
+        "vision.passive_right",
+        "tcp.z",
+    ];
+    set_reals(&mut i, &names, &[d[0], d[1], p[0], p[1], tcp[2]]).expect("inputs");
+    set_bool(&mut i, "vision.valid", true);
+    assert_eq!(i.do_step(0.0, 0.1).expect("step"), Status::Ok);
+    assert_eq!(i.store.integer(index_of("measurements")), 1);
+    assert!(
+        (real(&i, "object.y") - truth[1]).abs() < 2.5e-4,
+        "{}",
+        real(&i, "object.y")
+    );
+    assert!(real(&i, "object.x_std") > 3.0 * real(&i, "object.y_std"));
+    // Held high, no new measurement; a saved state keeps the edge.
+    let saved = i.save_state().expect("state");
+    assert_eq!(i.do_step(0.1, 0.1).expect("step"), Status::Ok);
+    assert_eq!(i.store.integer(index_of("measurements")), 1);
+    i.restore_state(&saved).expect("own state");
+    i.do_step(0.1, 0.1).expect("step");
+    assert_eq!(i.store.integer(index_of("measurements")), 1);
+    // A NaN detection with the flag raised again: skipped with a warning naming it.
+    set_bool(&mut i, "vision.valid", false);
+    i.do_step(0.2, 0.1).expect("step");
+    set_reals(&mut i, &["vision.right_distance"], &[f64::NAN])
+        .expect("NaN is stored, with a warning");
+    set_bool(&mut i, "vision.valid", true);
+    assert_eq!(i.do_step(0.3, 0.1).expect("step"), Status::Warning);
+    assert_eq!(i.store.integer(index_of("measurements")), 1);
+    assert!(
+        log.borrow()
+            .iter()
+            .any(|(s, m)| *s == Status::Warning && m.contains("vision.right_distance")),
+        "{:?}",
+        log.borrow()
+    );
+}
+
+#[test]
+fn an_image_without_a_vision_model_is_ignored_with_a_warning() {
+    let (mut i, log) = initialized();
+    set_bool(&mut i, "vision.valid", true);
+    assert_eq!(i.do_step(0.0, 0.1).expect("step"), Status::Warning);
+    assert_eq!(i.store.integer(index_of("measurements")), 0);
+    assert!(
+        log.borrow()
+            .iter()
+            .any(|(_, m)| m.contains("no vision model")),
+        "{:?}",
+        log.borrow()
+    );
+    // With a contact the wrench is still used, and the image is reported unused again.
+    assert_eq!(
+        contact(&mut i, 1.0, [1e-3, 1e-3], [0.0, 0.0]),
+        Status::Warning
+    );
+    assert_eq!(i.store.integer(index_of("measurements")), 1);
 }
