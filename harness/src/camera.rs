@@ -14,62 +14,19 @@ use mujoco_rs::renderer::{MjRenderer, png};
 use crate::error::{HarnessError, Result};
 use crate::scene::{APPROACH_CLEARANCE, SceneSpec};
 
-/// A pinhole camera (no distortion), as MuJoCo renders it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Camera {
-    /// Image width (px).
-    pub width: usize,
-    /// Image height (px).
-    pub height: usize,
-    /// Vertical field of view (degrees).
-    pub fovy: f64,
-    /// Optical centre in the world frame (m).
-    pub pos: [f64; 3],
-    /// Orientation, row-major: column k is camera axis k in the world frame (x right, y up,
-    /// looking along -z), as MuJoCo's `cam_xmat`.
-    pub xmat: [f64; 9],
-}
+pub use ftmap::vision::Camera;
 
-impl Camera {
-    /// The camera `cam` of a model whose data went through `mj_forward` (or a step).
-    pub fn from_data(data: &MjData<Box<MjModel>>, cam: usize) -> Self {
-        let model = data.model();
-        let g = &model.vis().global;
-        Self {
-            width: g.offwidth as usize,
-            height: g.offheight as usize,
-            fovy: model.cam_fovy()[cam],
-            pos: data.cam_xpos()[cam],
-            xmat: data.cam_xmat()[cam],
-        }
-    }
-
-    /// Focal length (px): half the image height over tan(fovy / 2).
-    pub fn focal(&self) -> f64 {
-        0.5 * self.height as f64 / (0.5 * self.fovy.to_radians()).tan()
-    }
-
-    /// A world point in the camera frame (x right, y up, -z the viewing direction).
-    pub fn to_camera(&self, p: [f64; 3]) -> [f64; 3] {
-        let d = [p[0] - self.pos[0], p[1] - self.pos[1], p[2] - self.pos[2]];
-        let r = &self.xmat;
-        std::array::from_fn(|k| r[k] * d[0] + r[3 + k] * d[1] + r[6 + k] * d[2])
-    }
-
-    /// Pixel coordinates of a world point; `None` behind the camera.
-    pub fn project(&self, p: [f64; 3]) -> Option<[f64; 2]> {
-        let c = self.to_camera(p);
-        if c[2] >= 0.0 {
-            return None;
-        }
-        let f = self.focal();
-        let (cx, cy) = (0.5 * (self.width as f64 - 1.0), 0.5 * (self.height as f64 - 1.0));
-        Some([cx + f * c[0] / -c[2], cy - f * c[1] / -c[2]])
-    }
-
-    /// The camera's optical centre in the world frame (m).
-    pub fn center(&self) -> [f64; 3] {
-        self.pos
+/// The camera `cam` of a model whose data went through `mj_forward` (or a step): MuJoCo's
+/// own calibration of it.
+pub fn from_data(data: &MjData<Box<MjModel>>, cam: usize) -> Camera {
+    let model = data.model();
+    let g = &model.vis().global;
+    Camera {
+        width: g.offwidth as usize,
+        height: g.offheight as usize,
+        fovy: model.cam_fovy()[cam],
+        pos: data.cam_xpos()[cam],
+        xmat: data.cam_xmat()[cam],
     }
 }
 
@@ -215,7 +172,7 @@ impl CameraScene {
 
     /// The pinhole model of the camera, as placed.
     pub fn camera(&self) -> Camera {
-        Camera::from_data(&self.data, self.cam)
+        from_data(&self.data, self.cam)
     }
 
     /// Renders the camera's image of the scene as placed.
@@ -232,7 +189,7 @@ impl CameraScene {
         r.sync_data(&mut self.data).map_err(fail)?;
         r.render().map_err(fail)?;
         let data = r.rgb_flat().map(<[u8]>::to_vec).unwrap_or_default();
-        let cam = Camera::from_data(&self.data, self.cam);
+        let cam = from_data(&self.data, self.cam);
         Ok(RgbImage { width: cam.width, height: cam.height, data })
     }
 }

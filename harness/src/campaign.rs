@@ -10,6 +10,7 @@ use rand::{Rng, SeedableRng};
 use serde::Serialize;
 
 use crate::error::{HarnessError, Result};
+use crate::eye::Eye;
 use crate::fmu_driver::Fmu;
 use crate::sim::Sim;
 use crate::trial::{Strategy, TrialConfig, TrialResult, run_trial};
@@ -26,11 +27,11 @@ pub fn grid_offsets(k: usize, size: f64) -> Vec<[f64; 2]> {
     (0..k).flat_map(|j| (0..k).map(move |i| [at(i), at(j)])).collect()
 }
 
-/// Runs one trial per offset; trial i uses seed `seed + i`.
+/// Runs one trial per offset; trial i uses seed `seed + i`; `eye` adds the camera.
 ///
 /// # Errors
-/// When the FMU fails.
-pub fn run_campaign(sim: &mut Sim, fmu: Option<&Fmu>, cfg: &TrialConfig, offsets: &[[f64; 2]], seed: u64) -> Result<Vec<TrialResult>> {
+/// When the FMU or rendering fails.
+pub fn run_campaign(sim: &mut Sim, fmu: Option<&Fmu>, mut eye: Option<&mut Eye>, cfg: &TrialConfig, offsets: &[[f64; 2]], seed: u64) -> Result<Vec<TrialResult>> {
     let bar = ProgressBar::new(offsets.len() as u64);
     bar.set_style(
         ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} trials {msg} ({elapsed}, eta {eta})")
@@ -41,7 +42,7 @@ pub fn run_campaign(sim: &mut Sim, fmu: Option<&Fmu>, cfg: &TrialConfig, offsets
     let mut results = Vec::with_capacity(offsets.len());
     let mut ok = 0;
     for (i, off) in offsets.iter().enumerate() {
-        let r = run_trial(sim, fmu, cfg, *off, seed + i as u64)?;
+        let r = run_trial(sim, fmu, eye.as_deref_mut(), cfg, *off, seed + i as u64)?;
         ok += usize::from(r.success);
         results.push(r);
         bar.set_message(format!("{ok} ok"));
@@ -51,7 +52,7 @@ pub fn run_campaign(sim: &mut Sim, fmu: Option<&Fmu>, cfg: &TrialConfig, offsets
     Ok(results)
 }
 
-/// Statistics of the contact counts.
+/// Statistics of a count per trial.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct ContactStats {
     /// Mean.
@@ -75,8 +76,16 @@ pub struct Summary {
     pub trials: usize,
     /// Fraction of trials that reached the goal depth.
     pub success_rate: f64,
-    /// Contact motions per trial (all trials).
+    /// Contact motions per trial (all trials), the inserting one included.
     pub contacts: ContactStats,
+    /// Contact measurements per trial: contact motions that did not insert the part.
+    pub measurements: ContactStats,
+    /// Mean `object.y_std` after the first contact measurement (m).
+    pub y_std_first_contact: f64,
+    /// Whether a camera took part (experiment D).
+    pub vision: bool,
+    /// Images in which not all four edges were found (all trials).
+    pub images_missed: usize,
     /// Mean distance of the last approach point from the true offset (m).
     pub final_error_mean: f64,
     /// Largest such distance (m).
@@ -91,6 +100,19 @@ pub struct Summary {
     pub sensor_noise: bool,
 }
 
+impl ContactStats {
+    /// Mean, median, p95 and maximum of `values`.
+    pub fn of(mut values: Vec<f64>) -> Self {
+        values.sort_by(f64::total_cmp);
+        Self {
+            mean: values.iter().sum::<f64>() / values.len().max(1) as f64,
+            median: percentile(&values, 0.5),
+            p95: percentile(&values, 0.95),
+            max: values.last().copied().unwrap_or(f64::NAN),
+        }
+    }
+}
+
 fn percentile(sorted: &[f64], q: f64) -> f64 {
     if sorted.is_empty() {
         return f64::NAN;
@@ -100,10 +122,9 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
 }
 
 /// Summarises trial results.
-pub fn summarize(task: &str, strategy: Strategy, sensor_noise: bool, results: &[TrialResult], wall: f64) -> Summary {
+pub fn summarize(task: &str, strategy: Strategy, sensor_noise: bool, vision: bool, results: &[TrialResult], wall: f64) -> Summary {
     let n = results.len().max(1) as f64;
-    let mut c: Vec<f64> = results.iter().map(|r| r.contacts as f64).collect();
-    c.sort_by(f64::total_cmp);
+    let first: Vec<f64> = results.iter().filter_map(first_contact_y_std).collect();
     let sim: f64 = results.iter().map(|r| r.sim_time).sum();
     let sim_wall: f64 = results.iter().map(|r| r.sim_wall).sum();
     let trial_wall: f64 = results.iter().map(|r| r.wall).sum();
@@ -112,12 +133,11 @@ pub fn summarize(task: &str, strategy: Strategy, sensor_noise: bool, results: &[
         strategy,
         trials: results.len(),
         success_rate: results.iter().filter(|r| r.success).count() as f64 / n,
-        contacts: ContactStats {
-            mean: c.iter().sum::<f64>() / n,
-            median: percentile(&c, 0.5),
-            p95: percentile(&c, 0.95),
-            max: c.last().copied().unwrap_or(f64::NAN),
-        },
+        contacts: ContactStats::of(results.iter().map(|r| r.contacts as f64).collect()),
+        measurements: ContactStats::of(results.iter().map(|r| r.measurements() as f64).collect()),
+        y_std_first_contact: first.iter().sum::<f64>() / first.len().max(1) as f64,
+        vision,
+        images_missed: results.iter().map(|r| r.images_missed).sum(),
         final_error_mean: results.iter().map(|r| r.final_error).sum::<f64>() / n,
         final_error_max: results.iter().map(|r| r.final_error).fold(0.0, f64::max),
         trials_per_second: results.len() as f64 / wall.max(1e-9),
@@ -135,12 +155,18 @@ impl Summary {
             ("task", self.task.clone()),
             ("strategy", format!("{:?}", self.strategy).to_lowercase()),
             ("sensor noise", if self.sensor_noise { "on" } else { "off" }.to_owned()),
+            ("camera", if self.vision { format!("on ({} images missed an edge)", self.images_missed) } else { "off".to_owned() }),
             ("trials", self.trials.to_string()),
             ("success rate", format!("{:.1} %", 100.0 * self.success_rate)),
             (
                 "contacts mean / median / p95 / max",
                 format!("{:.2} / {} / {} / {}", self.contacts.mean, self.contacts.median, self.contacts.p95, self.contacts.max),
             ),
+            (
+                "contact measurements mean / median / p95 / max",
+                format!("{:.2} / {} / {} / {}", self.measurements.mean, self.measurements.median, self.measurements.p95, self.measurements.max),
+            ),
+            ("object.y_std after the first contact", mm(self.y_std_first_contact)),
             ("final error mean / max", format!("{} / {}", mm(self.final_error_mean), mm(self.final_error_max))),
             ("trials per second", format!("{:.2}", self.trials_per_second)),
             ("real-time factor (MuJoCo / whole loop)", format!("{:.1} x / {:.1} x", self.realtime_factor, self.realtime_factor_overall)),
@@ -157,21 +183,30 @@ impl Summary {
 pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
     let io = |e: csv::Error| HarnessError::io(path, std::io::Error::other(e));
     let mut w = csv::Writer::from_path(path).map_err(io)?;
-    w.write_record(["trial", "offset_x_m", "offset_y_m", "contacts", "success", "final_error_m", "wall_s", "sim_time_s"]).map_err(io)?;
+    w.write_record(["trial", "offset_x_m", "offset_y_m", "contacts", "measurements", "success", "final_error_m", "y_std_first_contact_m", "images_missed", "wall_s", "sim_time_s"])
+        .map_err(io)?;
     for (i, r) in results.iter().enumerate() {
         w.write_record([
             i.to_string(),
             format!("{:.9}", r.offset[0]),
             format!("{:.9}", r.offset[1]),
             r.contacts.to_string(),
+            r.measurements().to_string(),
             r.success.to_string(),
             format!("{:.9}", r.final_error),
+            first_contact_y_std(r).map_or(String::new(), |v| format!("{v:.9}")),
+            r.images_missed.to_string(),
             format!("{:.4}", r.wall),
             format!("{:.4}", r.sim_time),
         ])
         .map_err(io)?;
     }
     w.flush().map_err(|e| HarnessError::io(path, e))
+}
+
+/// `object.y_std` after a trial's first contact measurement.
+fn first_contact_y_std(r: &TrialResult) -> Option<f64> {
+    r.steps.iter().find_map(|s| s.estimate).map(|e| e.std[1])
 }
 
 /// Writes `summary.json`.

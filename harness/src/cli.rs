@@ -8,6 +8,8 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use ftmap::Task;
 
 use crate::campaign::{self, Summary};
+use crate::eye::Eye;
+use crate::vision::Detector;
 use crate::fmu_driver::{Fmu, Settings, default_fmu_path};
 use crate::scene::{self, SceneSpec};
 use crate::sensor::Noise;
@@ -49,7 +51,10 @@ pub enum Command {
         /// Seed of the noise.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Only time the detection on this many noisy copies of the image (ms per image).
+        /// Line detector.
+        #[arg(long, value_enum, default_value_t = Detector::Gradient)]
+        detector: Detector,
+        /// Only time the detection (both detectors) on this many noisy copies of the image.
         #[arg(long)]
         bench: Option<usize>,
     },
@@ -122,6 +127,15 @@ pub enum Switch {
     Off,
 }
 
+/// The FMU's `vision_method`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum VisionMethodArg {
+    /// Relative feature distances (section III-B-1).
+    Relative,
+    /// Camera recalibration on the passive part (section III-B-2).
+    Recalibration,
+}
+
 /// Settings shared by `trials` and `sweep`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
@@ -134,9 +148,26 @@ pub struct RunArgs {
     /// Seed of the offsets, the sensor noise and the FMU.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// FT-Map for the FMU (default: the FMU's embedded peg_in_hole map).
+    /// FT-Map for the FMU (default: the FMU's embedded map for peg_in_hole, else the task's
+    /// map computed from its CAD meshes and cached in target/maps/).
     #[arg(long)]
     pub map: Option<PathBuf>,
+    /// Fuse the camera with the F/T sensor (experiment D): an image before the first contact
+    /// and at every contact, its edge features handed to the FMU.
+    #[arg(long)]
+    pub vision: bool,
+    /// How the FMU evaluates particles by vision.
+    #[arg(long, value_enum, default_value_t = VisionMethodArg::Recalibration)]
+    pub vision_method: VisionMethodArg,
+    /// FMU parameter `sigma_vision` (px).
+    #[arg(long)]
+    pub sigma_vision: Option<f64>,
+    /// Gaussian image noise (grey levels) added to each rendered image.
+    #[arg(long, default_value_t = 2.0)]
+    pub image_noise: f64,
+    /// Line detector for the camera's edges.
+    #[arg(long, value_enum, default_value_t = Detector::Gradient)]
+    pub detector: Detector,
     /// How the next contact point is chosen.
     #[arg(long, value_enum, default_value_t = Strategy::Pf)]
     pub strategy: Strategy,
@@ -187,12 +218,14 @@ fn config(run: &RunArgs, task: &Task) -> anyhow::Result<TrialConfig> {
     let map = match &run.map {
         Some(m) => Some(std::path::absolute(m).with_context(|| format!("map {}", m.display()))?),
         None if task.name == "peg_in_hole" => None,
-        None => bail!(
-            "task {} needs --map (the FMU embeds the peg_in_hole map only): `ftmap generate --task {} --out out/{}.ftmap`",
-            task.name,
-            task.name,
-            task.name
-        ),
+        None => {
+            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
+            let t0 = std::time::Instant::now();
+            let (path, computed) = ftmap::generate::cached(task, &dir).with_context(|| format!("the FT-Map of task {}", task.name))?;
+            let how = if computed { format!("computed from the CAD meshes in {:.1} s", t0.elapsed().as_secs_f64()) } else { "cached".into() };
+            println!("map {} ({how})", path.display());
+            Some(path)
+        }
     };
     if let Some(m) = &map
         && !m.is_file()
@@ -219,6 +252,11 @@ fn config(run: &RunArgs, task: &Task) -> anyhow::Result<TrialConfig> {
             particles: run.particles,
             iterations: run.iterations,
             sigma_torque: run.sigma_torque,
+            sigma_vision: run.sigma_vision,
+            vision_method: Some(match run.vision_method {
+                VisionMethodArg::Relative => 0,
+                VisionMethodArg::Recalibration => 1,
+            }),
             ..Settings::default()
         },
     })
@@ -234,10 +272,28 @@ fn load_fmu(run: &RunArgs) -> anyhow::Result<Option<Fmu>> {
     }
 }
 
+/// The camera, when `--vision` asks for it: its vision model is written to `<out>/vision.json`
+/// and handed to the FMU.
+fn open_eye(run: &RunArgs, task: &Task, cfg: &mut TrialConfig) -> anyhow::Result<Option<Eye>> {
+    if !run.vision {
+        return Ok(None);
+    }
+    if run.strategy != Strategy::Pf {
+        bail!("--vision needs --strategy pf (the spiral search uses no estimator)");
+    }
+    let eye = Eye::open(task, run.image_noise, run.detector)?;
+    std::fs::create_dir_all(&run.out).with_context(|| format!("creating {}", run.out.display()))?;
+    let path = std::path::absolute(run.out.join("vision.json")).context("the vision model's path")?;
+    eye.model().save(&path)?;
+    println!("vision model {} (camera as MuJoCo places it)", path.display());
+    cfg.settings.vision = Some(path);
+    Ok(Some(eye))
+}
+
 fn finish(run: &RunArgs, task: &Task, results: &[TrialResult], wall: f64) -> anyhow::Result<Summary> {
     std::fs::create_dir_all(&run.out).with_context(|| format!("creating {}", run.out.display()))?;
     campaign::write_trials_csv(&run.out.join("trials.csv"), results)?;
-    let summary = campaign::summarize(&task.name, run.strategy, run.sensor_noise == Switch::On, results, wall);
+    let summary = campaign::summarize(&task.name, run.strategy, run.sensor_noise == Switch::On, run.vision, results, wall);
     campaign::write_summary(&run.out.join("summary.json"), &summary)?;
     println!("{}", summary.table());
     Ok(summary)
@@ -248,35 +304,39 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     crate::runtime::check_mujoco()?;
     match cli.command {
         Command::Scene { task, check } => scene_cmd(task.as_deref(), check),
-        Command::Render { task, out, object_mm, tcp_mm, noise, seed, bench } => {
-            render_cmd(&task, &out, &parse_mm(&object_mm)?, &parse_mm(&tcp_mm)?, noise, seed, bench)
+        Command::Render { task, out, object_mm, tcp_mm, noise, seed, detector, bench } => {
+            let view = RenderView { object: parse_mm(&object_mm)?, tcp: parse_mm(&tcp_mm)?, noise, seed };
+            render_cmd(&task, &out, &view, detector, bench)
         }
         Command::Trials { run, trials, range_mm } => {
             let (task, mut sim) = open_task(&run.task)?;
-            let cfg = config(&run, &task)?;
+            let mut cfg = config(&run, &task)?;
+            let mut eye = open_eye(&run, &task, &mut cfg)?;
             let fmu = load_fmu(&run)?;
             let size = range_mm.map_or(task.omega.size_trans, |r| r * 1e-3);
             let offsets = campaign::random_offsets(trials, size, run.seed);
-            let (results, wall) = campaign::timed(|| campaign::run_campaign(&mut sim, fmu.as_ref(), &cfg, &offsets, run.seed));
+            let (results, wall) = campaign::timed(|| campaign::run_campaign(&mut sim, fmu.as_ref(), eye.as_mut(), &cfg, &offsets, run.seed));
             let results = results?;
             finish(&run, &task, &results, wall)?;
             if run.strategy == Strategy::Pf {
-                let pick = results.iter().position(|r| r.contacts >= 3).unwrap_or(0);
+                // The first trial that needed a second contact measurement (else the first).
+                let pick = results.iter().position(|r| r.measurements() >= 2).unwrap_or(0);
                 if let Some(r) = results.get(pick) {
                     let path = run.out.join("estimates.png");
                     plot::estimates(&path, r, task.omega.size_trans)?;
-                    println!("plot {} (trial {pick}: estimate and 1/2-sigma ellipse after contacts 1-3; the FMU exposes no particles)", path.display());
+                    println!("plot {} (trial {pick}: estimate and 1/2-sigma ellipse after its first three measurements; the FMU exposes no particles)", path.display());
                 }
             }
             Ok(())
         }
         Command::Sweep { run, grid, range_mm } => {
             let (task, mut sim) = open_task(&run.task)?;
-            let cfg = config(&run, &task)?;
+            let mut cfg = config(&run, &task)?;
+            let mut eye = open_eye(&run, &task, &mut cfg)?;
             let fmu = load_fmu(&run)?;
             let size = range_mm.map_or(task.omega.size_trans, |r| r * 1e-3);
             let offsets = campaign::grid_offsets(grid, size);
-            let (results, wall) = campaign::timed(|| campaign::run_campaign(&mut sim, fmu.as_ref(), &cfg, &offsets, run.seed));
+            let (results, wall) = campaign::timed(|| campaign::run_campaign(&mut sim, fmu.as_ref(), eye.as_mut(), &cfg, &offsets, run.seed));
             let results = results?;
             finish(&run, &task, &results, wall)?;
             let path = run.out.join("sweep.png");
@@ -332,15 +392,28 @@ fn parse_mm(s: &str) -> anyhow::Result<[f64; 2]> {
     }
 }
 
-fn render_cmd(task: &str, out: &Path, object: &[f64; 2], tcp: &[f64; 2], noise: f64, seed: u64, bench: Option<usize>) -> anyhow::Result<()> {
+/// What `render` shows: part B's offset and part A's position (m), image noise and its seed.
+struct RenderView {
+    object: [f64; 2],
+    tcp: [f64; 2],
+    noise: f64,
+    seed: u64,
+}
+
+fn render_cmd(task: &str, out: &Path, rv: &RenderView, detector: Detector, bench: Option<usize>) -> anyhow::Result<()> {
+    let RenderView { object, tcp, noise, seed } = *rv;
     use crate::camera::{CameraScene, RgbImage};
-    use crate::vision::{self, BearingGeometry};
+    use crate::vision::{self, Features};
     let task = Task::find(task)?;
     let spec = SceneSpec::of_task(&task)?;
-    let geo = BearingGeometry::of_task(&task).with_context(|| format!("task {} has no vision edges (only bearing_housing)", task.name))?;
+    let no_features = || format!("task {} has no vision features and no camera (only bearing_housing has)", task.name);
+    let designed = spec.camera.as_ref().with_context(no_features)?.camera.clone();
+    vision::task_model(&task, designed).with_context(no_features)?;
     let mut view = CameraScene::load(&scene::scene_path(&task), spec)?;
+    let model = vision::task_model(&task, view.camera()).with_context(no_features)?;
     let tcp = [tcp[0], tcp[1], view.approach_height()];
-    view.place(*object, tcp);
+    let object3 = [object[0], object[1], 0.0];
+    view.place(object, tcp);
     let t0 = std::time::Instant::now();
     let image = view.render()?;
     let render_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -360,26 +433,29 @@ fn render_cmd(task: &str, out: &Path, object: &[f64; 2], tcp: &[f64; 2], noise: 
                 g
             })
             .collect();
-        let t = std::time::Instant::now();
-        let mut found = 0;
-        for g in &copies {
-            found += vision::detect_bearing(g, &cam, &geo, tcp, *object, task.omega.size_trans).iter().filter(|e| e.found.is_ok()).count();
+        for d in [Detector::Gradient, Detector::Hough] {
+            let t = std::time::Instant::now();
+            let mut found = 0;
+            for g in &copies {
+                found += vision::detect_edges(g, &cam, &model, tcp, object3, task.omega.size_trans, d).iter().filter(|e| e.found.is_ok()).count();
+            }
+            let ms = t.elapsed().as_secs_f64() * 1e3 / copies.len() as f64;
+            println!(
+                "{d:?} detector (Sobel + 4 edges) on {} noisy {}x{} images: {ms:.2} ms per image, {:.0} images/s ({found} of {} edges found)",
+                copies.len(),
+                cam.width,
+                cam.height,
+                1e3 / ms,
+                4 * copies.len()
+            );
         }
-        let ms = t.elapsed().as_secs_f64() * 1e3 / copies.len() as f64;
-        println!(
-            "detection (Sobel + 4 edges) on {} noisy {}x{} images: {ms:.2} ms per image ({found} of {} edges found); first render (GL context) {render_ms:.0} ms, next frame {frame_ms:.0} ms",
-            copies.len(),
-            cam.width,
-            cam.height,
-            4 * copies.len()
-        );
+        println!("rendering: first frame (GL context) {render_ms:.0} ms, next frame {frame_ms:.0} ms");
         return Ok(());
     }
-    let results = vision::detect_bearing(&gray, &cam, &geo, tcp, *object, task.omega.size_trans);
+    let results = vision::detect_edges(&gray, &cam, &model, tcp, object3, task.omega.size_trans, detector);
     let mut img = if noise > 0.0 { RgbImage::from_gray(cam.width, cam.height, &gray) } else { image };
     println!("camera: {}x{} px, fovy {} deg, f = {:.1} px, at {:?} m; render {render_ms:.1} ms", cam.width, cam.height, cam.fovy, cam.focal(), cam.pos);
     println!("{:<14} {:>9} {:>9} {:>9} {:>9} {:>6}  detected", "edge", "angle", "offset", "d_angle", "d_offset", "band");
-    let mut lines = std::collections::BTreeMap::new();
     for r in &results {
         img.line(r.expected.p0, r.expected.p1, [60, 120, 255]);
         match &r.found {
@@ -398,16 +474,21 @@ fn render_cmd(task: &str, out: &Path, object: &[f64; 2], tcp: &[f64; 2], noise: 
                     l.points,
                     l.rms
                 );
-                lines.insert(r.name.clone(), l.clone());
             }
             Err(e) => println!("{:<14} {e}", r.name),
         }
     }
-    let v = cam.project([tcp[0], tcp[1], tcp[2]]).map_or(0.0, |p| p[1]);
-    for side in ["left", "right"] {
-        if let (Some(h), Some(s)) = (lines.get(&format!("housing.{side}")), lines.get(&format!("seat.{side}"))) {
-            println!("vision.{side}_distance = {:.2} px (seat edge minus housing edge, along u at row {v:.0})", vision::u_distance(h, s, v));
+    let v = cam.reference_row();
+    match (Features::of(&results, &cam), model.distances(tcp, object3)) {
+        (Some(f), Some(truth)) => {
+            for (k, side) in ["left", "right"].iter().enumerate() {
+                println!(
+                    "vision.{side}_distance = {:.2} px (truth {:.2}; active to passive edge along u at row {v:.1}), vision.passive_{side} = {:.2} px",
+                    f.distances[k], truth[k], f.passive[k]
+                );
+            }
         }
+        _ => println!("vision.valid = false (not all four edges found)"),
     }
     img.save_png(out)?;
     println!("image {} (blue: expected CAD edges, red: detected lines, yellow: endpoints)", out.display());

@@ -10,6 +10,7 @@ use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
 use fmi::traits::FmiImport;
 
 use crate::error::{HarnessError, Result};
+use crate::vision::Features;
 
 /// Communication step of the FMU (s).
 const STEP: f64 = 0.001;
@@ -34,6 +35,12 @@ pub struct Settings {
     pub sigma_torque: Option<f64>,
     /// `sigma_force` (N).
     pub sigma_force: Option<f64>,
+    /// `vision`: an absolute path of a vision model file.
+    pub vision: Option<PathBuf>,
+    /// `sigma_vision` (px).
+    pub sigma_vision: Option<f64>,
+    /// `vision_method` (0 relative, 1 recalibration).
+    pub vision_method: Option<i32>,
 }
 
 /// The FMU's estimate after a measurement.
@@ -72,6 +79,12 @@ struct Refs {
     iterations: u32,
     sigma_torque: u32,
     sigma_force: u32,
+    vision: u32,
+    sigma_vision: u32,
+    vision_method: u32,
+    /// vision.left_distance, right_distance, passive_left, passive_right.
+    features: [u32; 4],
+    vision_valid: u32,
 }
 
 /// A loaded (unpacked) FMU, from which trials instantiate estimators.
@@ -126,6 +139,11 @@ impl Fmu {
             iterations: vr("iterations")?,
             sigma_torque: vr("sigma_torque")?,
             sigma_force: vr("sigma_force")?,
+            vision: vr("vision")?,
+            sigma_vision: vr("sigma_vision")?,
+            vision_method: vr("vision_method")?,
+            features: [vr("vision.left_distance")?, vr("vision.right_distance")?, vr("vision.passive_left")?, vr("vision.passive_right")?],
+            vision_valid: vr("vision.valid")?,
         };
         Ok(Self { import, refs, path: path.to_owned() })
     }
@@ -145,17 +163,21 @@ impl Fmu {
             .instantiate_cs("harness", false, false)
             .map_err(|e| HarnessError::Fmu { what: "fmi2Instantiate".into(), reason: e.to_string() })?;
         let r = &self.refs;
-        if let Some(map) = &settings.map {
-            let text = map.to_string_lossy().into_owned();
-            let c = CString::new(text).map_err(|e| HarnessError::Invalid { what: "map", reason: e.to_string() })?;
-            inst.set_string(&[r.map], &[c]).map_err(fmi_err("set map"))?;
+        for (vr, file, name) in [(r.map, &settings.map, "map"), (r.vision, &settings.vision, "vision")] {
+            if let Some(file) = file {
+                let text = file.to_string_lossy().into_owned();
+                let c = CString::new(text).map_err(|e| HarnessError::Invalid { what: name, reason: e.to_string() })?;
+                inst.set_string(&[vr], &[c]).map_err(fmi_err(format!("set {name}")))?;
+            }
         }
-        for (vr, v, name) in [(r.seed, settings.seed, "seed"), (r.particles, settings.particles, "particles"), (r.iterations, settings.iterations, "iterations")] {
+        let ints = [(r.seed, settings.seed, "seed"), (r.particles, settings.particles, "particles"), (r.iterations, settings.iterations, "iterations"), (r.vision_method, settings.vision_method, "vision_method")];
+        for (vr, v, name) in ints {
             if let Some(v) = v {
                 inst.set_integer(&[vr], &[v]).map_err(fmi_err(format!("set {name}")))?;
             }
         }
-        for (vr, v, name) in [(r.sigma_torque, settings.sigma_torque, "sigma_torque"), (r.sigma_force, settings.sigma_force, "sigma_force")] {
+        let reals = [(r.sigma_torque, settings.sigma_torque, "sigma_torque"), (r.sigma_force, settings.sigma_force, "sigma_force"), (r.sigma_vision, settings.sigma_vision, "sigma_vision")];
+        for (vr, v, name) in reals {
             if let Some(v) = v {
                 inst.set_real(&[vr], &[v]).map_err(fmi_err(format!("set {name}")))?;
             }
@@ -182,19 +204,41 @@ impl Estimator {
     }
 
     /// Hands one settled contact to the FMU (wrench in the map's convention, TCP position
-    /// relative to the nominal goal) and returns its new estimate.
+    /// relative to the nominal goal), with an image's features when there are any, and
+    /// returns its new estimate.
     ///
     /// # Errors
     /// When the FMU refuses an input or the step.
-    pub fn measure(&mut self, wrench: [f64; 6], tcp: [f64; 3]) -> Result<Estimate> {
+    pub fn measure(&mut self, wrench: [f64; 6], tcp: [f64; 3], image: Option<&Features>) -> Result<Estimate> {
         let r = &self.refs;
         self.inst.set_real(&r.wrench, &wrench).map_err(fmi_err("set wrench"))?;
+        self.pulse(r.contact, tcp, image)
+    }
+
+    /// Hands an image's features alone (no contact; the task frame at `tcp`) to the FMU and
+    /// returns its new estimate.
+    ///
+    /// # Errors
+    /// When the FMU refuses an input or the step.
+    pub fn look(&mut self, tcp: [f64; 3], image: &Features) -> Result<Estimate> {
+        let valid = self.refs.vision_valid;
+        self.pulse(valid, tcp, Some(image))
+    }
+
+    /// Sets the TCP and the image inputs, raises the Boolean `trigger` for one step (the FMU
+    /// measures on its rising edge), reads the estimate and lowers everything again.
+    fn pulse(&mut self, trigger: u32, tcp: [f64; 3], image: Option<&Features>) -> Result<Estimate> {
+        let r = self.refs.clone();
         self.inst.set_real(&r.tcp, &[tcp[0], tcp[1], tcp[2], 0.0, 0.0, 0.0]).map_err(fmi_err("set tcp"))?;
-        self.inst.set_boolean(&[r.contact], &[1]).map_err(fmi_err("set contact"))?;
+        if let Some(f) = image {
+            let v = [f.distances[0], f.distances[1], f.passive[0], f.passive[1]];
+            self.inst.set_real(&r.features, &v).map_err(fmi_err("set vision features"))?;
+            self.inst.set_boolean(&[r.vision_valid], &[1]).map_err(fmi_err("set vision.valid"))?;
+        }
+        self.inst.set_boolean(&[trigger], &[1]).map_err(fmi_err("set contact / vision.valid"))?;
         self.step()?;
         let estimate = self.estimate()?;
-        let contact = self.refs.contact;
-        self.inst.set_boolean(&[contact], &[0]).map_err(fmi_err("set contact"))?;
+        self.inst.set_boolean(&[r.contact, r.vision_valid], &[0, 0]).map_err(fmi_err("lower contact, vision.valid"))?;
         self.step()?;
         Ok(estimate)
     }

@@ -1,6 +1,6 @@
-//! Plots a person looks at (PNG): the estimate after the first contacts of a trial (the
-//! paper's Fig. 8; the FMU exposes no particles, so each panel shows the estimate and its
-//! 1- and 2-sigma ellipses), contacts per true offset of a sweep (Fig. 10), and the
+//! Plots a person looks at (PNG): the estimate after the first measurements of a trial (the
+//! paper's Fig. 8, and Fig. 12 with a camera; the FMU exposes no particles, so each panel
+//! shows the estimate and its 1- and 2-sigma ellipses), contacts per true offset of a sweep (Fig. 10), and the
 //! agreement of two maps.
 
 use std::path::Path;
@@ -8,6 +8,7 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use crate::error::{HarnessError, Result};
+use crate::fmu_driver::Estimate;
 use crate::trial::TrialResult;
 
 type Draw = std::result::Result<(), Box<dyn std::error::Error>>;
@@ -23,7 +24,8 @@ fn ensure_dir(path: &Path) -> Result<()> {
     }
 }
 
-/// Estimate and spread after contacts 1, 2, 3 of `trial` over Omega (±`size` m).
+/// Estimate and spread after the first three measurements of `trial` (an image before the
+/// first contact, where a camera took part, then contacts) over Omega (±`size` m).
 ///
 /// # Errors
 /// When the image cannot be written.
@@ -32,33 +34,52 @@ pub fn estimates(path: &Path, trial: &TrialResult, size: f64) -> Result<()> {
     wrap(path, draw_estimates(path, trial, size))
 }
 
+/// One panel: its caption, the contact points so far and the estimate shown.
+struct Panel {
+    caption: String,
+    tcps: Vec<(f64, f64)>,
+    estimate: Option<Estimate>,
+}
+
+/// The first three measurements of a trial as panels.
+fn panels(trial: &TrialResult) -> Vec<Panel> {
+    let mut out: Vec<Panel> = trial.first_look.iter().map(|e| Panel { caption: "after the first image (no contact)".into(), tcps: Vec::new(), estimate: Some(*e) }).collect();
+    for (k, st) in trial.steps.iter().enumerate() {
+        let caption = match (st.estimate, st.image) {
+            (Some(_), true) => format!("after contact {} + image", k + 1),
+            (Some(_), false) => format!("after contact {}", k + 1),
+            (None, _) => format!("contact {}: inserted", k + 1),
+        };
+        let tcps = trial.steps[..=k].iter().map(|s| (s.tcp[0] * 1e3, s.tcp[1] * 1e3)).collect();
+        out.push(Panel { caption, tcps, estimate: st.estimate });
+    }
+    out.truncate(3);
+    while out.len() < 3 {
+        out.push(Panel { caption: "none (done)".into(), tcps: Vec::new(), estimate: None });
+    }
+    out
+}
+
 fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
     let root = BitMapBackend::new(path, (1500, 540)).into_drawing_area();
     root.fill(&WHITE)?;
-    let panels = root.split_evenly((1, 3));
+    let areas = root.split_evenly((1, 3));
     let s = size * 1e3;
     let truth = (trial.offset[0] * 1e3, trial.offset[1] * 1e3);
-    for (k, area) in panels.iter().enumerate() {
-        let step = trial.steps.get(k);
-        let caption = match step {
-            Some(st) if st.estimate.is_some() => format!("after contact {}", k + 1),
-            Some(_) => format!("contact {}: inserted", k + 1),
-            None => format!("contact {}: none (done)", k + 1),
-        };
+    for (area, panel) in areas.iter().zip(panels(trial)) {
         let mut chart = ChartBuilder::on(area)
-            .caption(caption, ("sans-serif", 20))
+            .caption(&panel.caption, ("sans-serif", 20))
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(50)
             .build_cartesian_2d(-s..s, -s..s)?;
         chart.configure_mesh().x_desc("object.x [mm]").y_desc("object.y [mm]").draw()?;
         chart.draw_series(std::iter::once(Cross::new(truth, 9, RED.stroke_width(3))))?.label("true offset").legend(|(x, y)| Cross::new((x, y), 5, RED.stroke_width(2)));
-        let tcps: Vec<(f64, f64)> = trial.steps.iter().take(k + 1).map(|st| (st.tcp[0] * 1e3, st.tcp[1] * 1e3)).collect();
         chart
-            .draw_series(tcps.iter().map(|p| TriangleMarker::new(*p, 7, BLACK.filled())))?
+            .draw_series(panel.tcps.iter().map(|p| TriangleMarker::new(*p, 7, BLACK.filled())))?
             .label("contact points")
             .legend(|(x, y)| TriangleMarker::new((x, y), 5, BLACK.filled()));
-        if let Some(e) = step.and_then(|st| st.estimate) {
+        if let Some(e) = panel.estimate {
             let (cx, cy) = (e.object[0] * 1e3, e.object[1] * 1e3);
             for (n, colour) in [(1.0, BLUE.mix(1.0)), (2.0, BLUE.mix(0.4))] {
                 let ring: Vec<(f64, f64)> = (0..=72)

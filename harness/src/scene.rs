@@ -22,6 +22,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use ftmap::Task;
+use ftmap::vision::Camera;
 use ftmap::cad::{self, Geometry, Role};
 
 use crate::error::{HarnessError, Result};
@@ -51,26 +52,8 @@ pub const CAMERA_RESOLUTION: [usize; 2] = [640, 480];
 pub struct CameraSpec {
     /// Name of the MJCF camera.
     pub name: String,
-    /// Position in the world (= nominal goal) frame (m).
-    pub pos: [f64; 3],
-    /// Camera x axis (image right) and y axis (image up) in the world frame; it looks along -z.
-    pub xyaxes: [f64; 6],
-    /// Vertical field of view (degrees, as MJCF always gives it).
-    pub fovy: f64,
-}
-
-impl CameraSpec {
-    /// A camera `distance` in front of the goal along -x, looking along +x at `aim` (world
-    /// point on the x axis' plane y = 0), tilted down by `pitch` (rad).
-    pub fn looking_along_x(distance: f64, aim_z: f64, pitch: f64, fovy: f64) -> Self {
-        let (s, c) = pitch.sin_cos();
-        Self {
-            name: "vision".into(),
-            pos: [-distance, 0.0, aim_z + distance * pitch.tan()],
-            xyaxes: [0.0, -1.0, 0.0, s, 0.0, c],
-            fovy,
-        }
-    }
+    /// The camera as designed (pose in the world = nominal goal frame, fovy, resolution).
+    pub camera: Camera,
 }
 
 /// A closed convex outline in a part's xy plane.
@@ -285,7 +268,8 @@ impl SceneSpec {
             // Experiment D: looking along x at the housing's and the seat's side edges,
             // 200 mm in front, aimed between the seat's top and the housing, 8 degrees down.
             Geometry::BearingHousing { seat_height, .. } => {
-                Some(CameraSpec::looking_along_x(0.2, seat_height + 0.002, 8f64.to_radians(), 12.0))
+                let camera = Camera::looking_along_x(0.2, seat_height + 0.002, 8f64.to_radians(), 12.0, CAMERA_RESOLUTION);
+                Some(CameraSpec { name: "vision".into(), camera })
             }
             _ => None,
         };
@@ -391,14 +375,14 @@ impl SceneSpec {
         let shadow = if self.camera.is_some() { " castshadow=\"false\"" } else { "" };
         let _ = writeln!(x, "    <light pos=\"0 -0.1 0.3\" dir=\"0 0.3 -1\"{shadow}/>");
         if let Some(c) = &self.camera {
-            let a: Vec<String> = c.xyaxes.iter().map(|&v| f(v)).collect();
+            let a: Vec<String> = c.camera.xyaxes().iter().map(|&v| f(v)).collect();
             let _ = writeln!(
                 x,
                 "    <camera name=\"{}\" pos=\"{}\" xyaxes=\"{}\" fovy=\"{}\"/>",
                 c.name,
-                v3(c.pos),
+                v3(c.camera.pos),
                 a.join(" "),
-                f(c.fovy)
+                f(c.camera.fovy)
             );
         }
         let _ = writeln!(x, "    <body name=\"part_b\" mocap=\"true\" pos=\"0 0 0\">");

@@ -1,5 +1,7 @@
 //! One assembly trial: the closed loop of the paper's Algorithm 1 (contact, measure, move
-//! to the estimate, contact again) or the blind spiral search it is compared with.
+//! to the estimate, contact again) or the blind spiral search it is compared with. With a
+//! camera (experiment D), an image is taken before the first contact motion (handed to the
+//! FMU alone) and at every contact (handed with the wrench).
 //!
 //! Success: a contact motion settles with the task frame less than [`SUCCESS_HEIGHT`]
 //! above the goal, i.e. the part slid down to (near) the goal depth. Every contact motion
@@ -12,6 +14,7 @@ use rand::SeedableRng;
 use rand::rngs::StdRng;
 
 use crate::error::Result;
+use crate::eye::Eye;
 use crate::fmu_driver::{Estimate, Fmu, Settings};
 use crate::sensor::{Noise, map_wrench};
 use crate::sim::Sim;
@@ -57,6 +60,8 @@ pub struct Step {
     pub wrench: [f64; 6],
     /// The FMU's estimate after this contact (pf only).
     pub estimate: Option<Estimate>,
+    /// An image's features went with the wrench.
+    pub image: bool,
 }
 
 /// What a trial ended with.
@@ -78,6 +83,17 @@ pub struct TrialResult {
     pub sim_wall: f64,
     /// Every contact motion.
     pub steps: Vec<Step>,
+    /// The estimate after the image taken before the first contact (with a camera).
+    pub first_look: Option<Estimate>,
+    /// Images in which not all four edges were found.
+    pub images_missed: usize,
+}
+
+impl TrialResult {
+    /// Contact measurements handed to the FMU (contact motions that did not insert the part).
+    pub fn measurements(&self) -> usize {
+        self.steps.iter().filter(|s| s.estimate.is_some()).count()
+    }
 }
 
 /// Points of an Archimedean spiral r = pitch * theta / 2 pi about the origin, spaced about
@@ -94,11 +110,12 @@ pub fn spiral(step: f64, radius: f64) -> Vec<[f64; 2]> {
     pts
 }
 
-/// Runs one trial against the true `offset` with seed `seed` (noise and FMU seed).
+/// Runs one trial against the true `offset` with seed `seed` (noise and FMU seed); `eye`
+/// adds the camera.
 ///
 /// # Errors
-/// When the FMU fails.
-pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, cfg: &TrialConfig, offset: [f64; 2], seed: u64) -> Result<TrialResult> {
+/// When the FMU or rendering fails.
+pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, mut eye: Option<&mut Eye>, cfg: &TrialConfig, offset: [f64; 2], seed: u64) -> Result<TrialResult> {
     let start = Instant::now();
     let sim_start = sim.simulated();
     sim.set_object(offset);
@@ -118,6 +135,18 @@ pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, cfg: &TrialConfig, offset: [f
     let mut steps = Vec::new();
     let mut success = false;
     let mut sim_wall = 0.0;
+    let (mut first_look, mut images_missed) = (None, 0);
+    if let (Some(e), Some(eye)) = (estimator.as_mut(), eye.as_deref_mut()) {
+        let tcp = [target[0], target[1], eye.approach_height()];
+        match eye.look(offset, tcp, seed)?.features {
+            Some(f) => {
+                let est = e.look(tcp, &f)?;
+                target = est.object;
+                first_look = Some(est);
+            }
+            None => images_missed += 1,
+        }
+    }
     while steps.len() < cfg.max_contacts && sim.simulated() - sim_start < cfg.max_sim_time {
         if cfg.strategy == Strategy::Spiral {
             match spiral_pts.get(steps.len()) {
@@ -130,19 +159,27 @@ pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, cfg: &TrialConfig, offset: [f
         sim_wall += t0.elapsed().as_secs_f64();
         let wrench = cfg.noise.apply(map_wrench(c.raw), &mut rng);
         if c.tcp[2] < SUCCESS_HEIGHT {
-            steps.push(Step { tcp: c.tcp, wrench, estimate: None });
+            steps.push(Step { tcp: c.tcp, wrench, estimate: None, image: false });
             success = true;
             break;
         }
+        let image = match (&estimator, eye.as_deref_mut()) {
+            (Some(_), Some(eye)) => {
+                let f = eye.look(offset, c.tcp, seed.wrapping_add(steps.len() as u64 + 1))?.features;
+                images_missed += usize::from(f.is_none());
+                f
+            }
+            _ => None,
+        };
         let estimate = match estimator.as_mut() {
             Some(e) => {
-                let est = e.measure(wrench, c.tcp)?;
+                let est = e.measure(wrench, c.tcp, image.as_ref())?;
                 target = est.object;
                 Some(est)
             }
             None => None,
         };
-        steps.push(Step { tcp: c.tcp, wrench, estimate });
+        steps.push(Step { tcp: c.tcp, wrench, estimate, image: image.is_some() });
     }
     let last = steps.last().map_or([0.0; 2], |s| [s.tcp[0], s.tcp[1]]);
     Ok(TrialResult {
@@ -154,6 +191,8 @@ pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, cfg: &TrialConfig, offset: [f
         sim_time: sim.simulated() - sim_start,
         sim_wall,
         steps,
+        first_look,
+        images_missed,
     })
 }
 

@@ -1,5 +1,6 @@
-//! Line edge detection from an expected image pose (the paper's Fig. 5, section III-A), and
-//! the expected image edges of the bearing housing task (experiment D).
+//! Line edge detection from an expected image pose (the paper's Fig. 5, section III-A), the
+//! expected image edges of a task's vision model (experiment D), and the relative features
+//! that the FMU compares per particle.
 //!
 //! From the expected endpoints of a CAD edge projected with the calibrated camera: the
 //! endpoints are moved toward each other; along the line's major axis (image columns for a
@@ -11,7 +12,7 @@
 //! the expected line is too weak, or too few points agree on a line, the result is
 //! [`VisionError::FeatureNotFound`], never a guess.
 
-use crate::camera::Camera;
+use ftmap::vision::{Camera, VisionModel};
 
 /// Why a feature was not detected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -51,7 +52,7 @@ impl Gradient {
     }
 
     /// Gradient component along the unit normal `n` at an integer pixel (0 outside).
-    fn along(&self, x: i64, y: i64, n: [f32; 2]) -> f32 {
+    pub(crate) fn along(&self, x: i64, y: i64, n: [f32; 2]) -> f32 {
         if x < 1 || y < 1 || x >= self.width as i64 - 1 || y >= self.height as i64 - 1 {
             return 0.0;
         }
@@ -140,7 +141,7 @@ fn fit(p: &[[f64; 2]]) -> Option<(f64, f64)> {
 }
 
 /// Fit, drop points farther than `tol` from the line, refit (twice).
-fn robust_fit(p: &mut Vec<[f64; 2]>, tol: f64) -> Option<(f64, f64)> {
+pub(crate) fn robust_fit(p: &mut Vec<[f64; 2]>, tol: f64) -> Option<(f64, f64)> {
     let mut ab = fit(p)?;
     for _ in 0..2 {
         p.retain(|q| (q[1] - ab.0 * q[0] - ab.1).abs() <= tol);
@@ -240,10 +241,10 @@ pub fn detect_line(grad: &Gradient, expected: [[f64; 2]; 2], p: &LineParams) -> 
     Ok(line)
 }
 
-/// A named expected edge: its 3-D endpoints (world frame, m) and search band (px).
+/// A named expected edge: its 3-D endpoints.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EdgeModel {
-    /// Name (e.g. `housing.left`).
+    /// Name: `active.left`, `active.right`, `passive.left`, `passive.right`.
     pub name: String,
     /// Endpoints in the world frame (m).
     pub ends: [[f64; 3]; 2],
@@ -262,84 +263,31 @@ impl EdgeModel {
     }
 }
 
-/// Silhouette edges of the bearing housing task seen by `cam` (experiment D): the housing's
-/// two outermost vertical box edges (part A at `tcp`, box `housing` = [x, y, z] sizes, bottom
-/// face at tcp z) and the seat's two silhouette generators (a vertical cylinder of
-/// `seat_radius`, `seat_height` high, on part B at `object`). Names end in `.left` / `.right`
-/// by image side.
-pub fn bearing_edges(cam: &Camera, tcp: [f64; 3], housing: [f64; 3], object: [f64; 2], seat_radius: f64, seat_height: f64) -> Vec<EdgeModel> {
-    let c = cam.center();
+/// The silhouette edges of a vision model's parts seen by `cam`: the active part with the
+/// task frame at `tcp`, the passive part with the goal frame at `object` (m).
+pub fn model_edges(model: &VisionModel, cam: &Camera, tcp: [f64; 3], object: [f64; 3]) -> Vec<EdgeModel> {
     let mut out = Vec::new();
-    // Housing: the vertical corner edges; the silhouette ones are the extreme image columns.
-    let (hx, hy) = (housing[0] / 2.0, housing[1] / 2.0);
-    let mut corners: Vec<(f64, [f64; 2])> = [[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]]
-        .iter()
-        .filter_map(|q| {
-            let p = [tcp[0] + q[0], tcp[1] + q[1]];
-            cam.project([p[0], p[1], tcp[2]]).map(|uv| (uv[0], p))
-        })
-        .collect();
-    corners.sort_by(|a, b| a.0.total_cmp(&b.0));
-    if let (Some(l), Some(r)) = (corners.first(), corners.last()) {
-        for (name, p) in [("housing.left", l.1), ("housing.right", r.1)] {
-            out.push(EdgeModel { name: name.into(), ends: [[p[0], p[1], tcp[2]], [p[0], p[1], tcp[2] + housing[2]]] });
-        }
-    }
-    // Seat: tangent points of the camera's xy position on the circle.
-    let d = [c[0] - object[0], c[1] - object[1]];
-    let dd = d[0] * d[0] + d[1] * d[1];
-    if dd > seat_radius * seat_radius {
-        let r = seat_radius;
-        let (k, h) = (r * r / dd, r * (dd - r * r).sqrt() / dd);
-        let mut tangents: Vec<(f64, [f64; 2])> = [1.0, -1.0]
-            .iter()
-            .filter_map(|sgn| {
-                let p = [object[0] + k * d[0] - sgn * h * d[1], object[1] + k * d[1] + sgn * h * d[0]];
-                cam.project([p[0], p[1], 0.0]).map(|uv| (uv[0], p))
-            })
-            .collect();
-        tangents.sort_by(|a, b| a.0.total_cmp(&b.0));
-        if let (Some(l), Some(r)) = (tangents.first(), tangents.last()) {
-            for (name, p) in [("seat.left", l.1), ("seat.right", r.1)] {
-                out.push(EdgeModel { name: name.into(), ends: [[p[0], p[1], 0.0], [p[0], p[1], seat_height]] });
-            }
+    for (part, prism, at) in [("active", &model.active, tcp), ("passive", &model.passive, object)] {
+        if let Some(s) = prism.silhouette(cam, at) {
+            out.push(EdgeModel { name: format!("{part}.left"), ends: s.left });
+            out.push(EdgeModel { name: format!("{part}.right"), ends: s.right });
         }
     }
     out
 }
 
-/// The bearing housing task's dimensions that the vision edges come from.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BearingGeometry {
-    /// Housing block sizes x, y, z (m).
-    pub housing: [f64; 3],
-    /// Seat radius (m).
-    pub seat_radius: f64,
-    /// Seat height above the plate (m).
-    pub seat_height: f64,
+/// The vision model of a task seen by `camera`; `None` when the task has no features to
+/// compare (only the bearing housing has them).
+pub fn task_model(task: &ftmap::Task, camera: Camera) -> Option<VisionModel> {
+    VisionModel::of_geometry(&ftmap::cad::geometry_of(&task.path).ok()?, camera)
 }
 
-impl BearingGeometry {
-    /// From a task's `[geometry]`; `None` when the task is not a bearing housing.
-    pub fn of_task(task: &ftmap::Task) -> Option<Self> {
-        match ftmap::cad::geometry_of(&task.path).ok()? {
-            ftmap::cad::Geometry::BearingHousing { housing, seat_radius, seat_height, .. } => Some(Self { housing, seat_radius, seat_height }),
-            _ => None,
-        }
-    }
-
-    /// The four silhouette edges (see [`bearing_edges`]).
-    pub fn edges(&self, cam: &Camera, tcp: [f64; 3], object: [f64; 2]) -> Vec<EdgeModel> {
-        bearing_edges(cam, tcp, self.housing, object, self.seat_radius, self.seat_height)
-    }
-}
-
-/// One edge of experiment D: where the model expects it, where it truly is, what was found.
+/// One edge: where the model expects it, where it truly is, what was found.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EdgeResult {
     /// Edge name.
     pub name: String,
-    /// Expected image line (part B at its nominal pose, part A at the TCP).
+    /// Expected image line (passive part at its nominal pose, active part at the TCP).
     pub expected: Line,
     /// Ground truth: the edge projected at the true pose.
     pub truth: Line,
@@ -349,37 +297,83 @@ pub struct EdgeResult {
     pub found: Result<Line, VisionError>,
 }
 
+/// Column (u) of a line at image row `v`.
+pub fn u_at(l: &Line, v: f64) -> f64 {
+    let dv = l.p1[1] - l.p0[1];
+    if dv.abs() < 1e-12 { l.p0[0] } else { l.p0[0] + (v - l.p0[1]) * (l.p1[0] - l.p0[0]) / dv }
+}
+
 /// Horizontal image distance (px) from line `a` to line `b` at image row `v`.
 pub fn u_distance(a: &Line, b: &Line, v: f64) -> f64 {
-    let u_at = |l: &Line| {
-        let dv = l.p1[1] - l.p0[1];
-        if dv.abs() < 1e-12 { l.p0[0] } else { l.p0[0] + (v - l.p0[1]) * (l.p1[0] - l.p0[0]) / dv }
-    };
-    u_at(b) - u_at(a)
+    u_at(b, v) - u_at(a, v)
 }
 
-/// Detects the four edges of experiment D in a grey image. Part A's pose (`tcp`) is known to
-/// the robot; part B is expected at the nominal goal and may lie anywhere within
-/// `size_trans` (m) in x and y, so its search band covers that; `object` is the true pose,
-/// used only for the ground truth lines.
-pub fn detect_bearing(gray: &[f32], cam: &Camera, geo: &BearingGeometry, tcp: [f64; 3], object: [f64; 2], size_trans: f64) -> Vec<EdgeResult> {
+/// The relative features of one image (the FMU's `vision.*` inputs), at the camera's
+/// reference row.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Features {
+    /// Distance from the active part's edge to the passive part's edge: left, right (px).
+    pub distances: [f64; 2],
+    /// Columns of the passive part's left and right edges (px).
+    pub passive: [f64; 2],
+}
+
+impl Features {
+    /// From the detections; `None` unless all four edges were found.
+    pub fn of(results: &[EdgeResult], cam: &Camera) -> Option<Self> {
+        let v = cam.reference_row();
+        let found = |name: &str| results.iter().find(|r| r.name == name)?.found.as_ref().ok();
+        let side = |s: &str| Some((found(&format!("active.{s}"))?, found(&format!("passive.{s}"))?));
+        let ((al, pl), (ar, pr)) = (side("left")?, side("right")?);
+        Some(Self { distances: [u_distance(al, pl, v), u_distance(ar, pr, v)], passive: [u_at(pl, v), u_at(pr, v)] })
+    }
+}
+
+/// Which line detector finds the edges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum Detector {
+    /// Gradient maxima per row or column, fitted and extended (the paper's Fig. 5).
+    #[default]
+    Gradient,
+    /// The bounded Hough transform restricted to the expected area, then the same refinement.
+    Hough,
+}
+
+impl Detector {
+    /// Detects the line expected between `ends` within `band` px.
+    ///
+    /// # Errors
+    /// [`VisionError::FeatureNotFound`] as the detector decides.
+    pub fn detect(self, grad: &Gradient, ends: [[f64; 2]; 2], band: f64) -> Result<Line, VisionError> {
+        match self {
+            Self::Gradient => detect_line(grad, ends, &LineParams { band, ..LineParams::default() }),
+            Self::Hough => crate::hough::detect_line_hough(grad, ends, &crate::hough::HoughParams { band, ..crate::hough::HoughParams::default() }),
+        }
+    }
+}
+
+/// Detects a vision model's four edges in a grey image. The active part's pose (`tcp`) is
+/// known to the robot; the passive part is expected at the nominal goal and may lie anywhere
+/// within `size_trans` (m) in x and y, so its search band covers that; `object` is the true
+/// pose, used only for the ground truth lines.
+pub fn detect_edges(gray: &[f32], cam: &Camera, model: &VisionModel, tcp: [f64; 3], object: [f64; 3], size_trans: f64, detector: Detector) -> Vec<EdgeResult> {
     let grad = Gradient::sobel(cam.width, cam.height, gray);
-    detect_bearing_in(&grad, cam, geo, tcp, object, size_trans)
+    detect_edges_in(&grad, cam, model, tcp, object, size_trans, detector)
 }
 
-/// As [`detect_bearing`], on a gradient image.
-pub fn detect_bearing_in(grad: &Gradient, cam: &Camera, geo: &BearingGeometry, tcp: [f64; 3], object: [f64; 2], size_trans: f64) -> Vec<EdgeResult> {
-    let expected = geo.edges(cam, tcp, [0.0, 0.0]);
-    let truth = geo.edges(cam, tcp, object);
+/// As [`detect_edges`], on a gradient image.
+pub fn detect_edges_in(grad: &Gradient, cam: &Camera, model: &VisionModel, tcp: [f64; 3], object: [f64; 3], size_trans: f64, detector: Detector) -> Vec<EdgeResult> {
+    let expected = model_edges(model, cam, tcp, [0.0; 3]);
+    let truth = model_edges(model, cam, tcp, object);
     let s = size_trans;
-    let shifted: Vec<Vec<EdgeModel>> = [[s, s], [s, -s], [-s, s], [-s, -s]].iter().map(|o| geo.edges(cam, tcp, *o)).collect();
+    let shifted: Vec<Vec<EdgeModel>> = [[s, s, 0.0], [s, -s, 0.0], [-s, s, 0.0], [-s, -s, 0.0]].iter().map(|o| model_edges(model, cam, tcp, *o)).collect();
     expected
         .iter()
         .zip(&truth)
         .filter_map(|(e, t)| {
             let ends = e.project(cam)?;
             let (el, tl) = (e.line(cam)?, t.line(cam)?);
-            let band = if e.name.starts_with("seat") {
+            let band = if e.name.starts_with("passive") {
                 let far = shifted
                     .iter()
                     .filter_map(|v| v.iter().find(|m| m.name == e.name)?.line(cam))
@@ -389,8 +383,7 @@ pub fn detect_bearing_in(grad: &Gradient, cam: &Camera, geo: &BearingGeometry, t
             } else {
                 LineParams::default().band
             };
-            let params = LineParams { band, ..LineParams::default() };
-            Some(EdgeResult { name: e.name.clone(), expected: el, truth: tl, band, found: detect_line(grad, ends, &params) })
+            Some(EdgeResult { name: e.name.clone(), expected: el, truth: tl, band, found: detector.detect(grad, ends, band) })
         })
         .collect()
 }

@@ -6,21 +6,22 @@ use std::sync::Mutex;
 use ftmap::Task;
 use harness::camera::CameraScene;
 use harness::scene::{SceneSpec, scene_path};
-use harness::vision::{self, BearingGeometry, Gradient, LineParams, VisionError, detect_line};
+use ftmap::vision::VisionModel;
+use harness::vision::{self, Detector, Features, Gradient, LineParams, VisionError, detect_line};
 
 /// One offscreen GL context at a time.
 static GL: Mutex<()> = Mutex::new(());
 
-fn bearing() -> (Task, CameraScene, BearingGeometry) {
+fn bearing() -> (Task, CameraScene, VisionModel) {
     let task = Task::find("bearing_housing").expect("task bearing_housing");
     let spec = SceneSpec::of_task(&task).expect("its scene description");
     let view = CameraScene::load(&scene_path(&task), spec).expect("its committed scene with camera `vision`");
-    let geo = BearingGeometry::of_task(&task).expect("bearing geometry");
-    (task, view, geo)
+    let model = vision::task_model(&task, view.camera()).expect("bearing housing features");
+    (task, view, model)
 }
 
 /// Detection errors (degrees, px) of all four edges, each asserted found.
-fn errors(task: &Task, view: &mut CameraScene, geo: &BearingGeometry, object: [f64; 2], tcp_xy: [f64; 2], noise: Option<u64>) -> Vec<(String, f64, f64)> {
+fn errors(task: &Task, view: &mut CameraScene, model: &VisionModel, object: [f64; 2], tcp_xy: [f64; 2], noise: Option<u64>) -> Vec<(String, f64, f64)> {
     let tcp = [tcp_xy[0], tcp_xy[1], view.approach_height()];
     view.place(object, tcp);
     let image = view.render().expect("offscreen rendering (Mesa EGL)");
@@ -29,7 +30,7 @@ fn errors(task: &Task, view: &mut CameraScene, geo: &BearingGeometry, object: [f
     if let Some(seed) = noise {
         vision::add_noise(&mut gray, 5.0, seed);
     }
-    let results = vision::detect_bearing(&gray, &cam, geo, tcp, object, task.omega.size_trans);
+    let results = vision::detect_edges(&gray, &cam, model, tcp, [object[0], object[1], 0.0], task.omega.size_trans, Detector::Gradient);
     assert_eq!(results.len(), 4, "four edges expected");
     results
         .into_iter()
@@ -43,11 +44,11 @@ fn errors(task: &Task, view: &mut CameraScene, geo: &BearingGeometry, object: [f
 #[test]
 fn detected_edges_match_the_projected_geometry() {
     let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    let (task, mut view, geo) = bearing();
+    let (task, mut view, model) = bearing();
     let cases = [([0.0, 0.0], [0.0, 0.0]), ([0.002, -0.003], [0.0, 0.0]), ([-0.004, 0.0045], [0.0, 0.0]), ([0.001, 0.002], [0.0005, -0.001])];
     for (k, (object, tcp)) in cases.iter().enumerate() {
         for noise in [None, Some(k as u64 + 1)] {
-            for (name, da, doff) in errors(&task, &mut view, &geo, *object, *tcp, noise) {
+            for (name, da, doff) in errors(&task, &mut view, &model, *object, *tcp, noise) {
                 println!("object {object:?} tcp {tcp:?} noise {noise:?} {name}: d_angle {da:.4} deg, d_offset {doff:.3} px");
                 assert!(da.abs() < 0.2, "{name} at {object:?} (noise {noise:?}): angle error {da} deg");
                 assert!(doff.abs() < 0.5, "{name} at {object:?} (noise {noise:?}): offset error {doff} px");
@@ -100,10 +101,10 @@ fn camera_model_projects_like_mujoco_renders() {
 #[test]
 fn no_part_in_view_gives_feature_not_found() {
     let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    let (task, mut view, geo) = bearing();
+    let (task, mut view, model) = bearing();
     let tcp = [0.0, 0.0, view.approach_height()];
     view.place([0.0, 0.0], tcp);
-    let expected = geo.edges(&view.camera(), tcp, [0.0, 0.0]);
+    let expected = vision::model_edges(&model, &view.camera(), tcp, [0.0; 3]);
     // Both parts moved 1 m aside: nothing in the camera's view.
     view.place([0.0, 1.0], [0.0, 1.0, tcp[2]]);
     let image = view.render().expect("offscreen rendering (Mesa EGL)");
@@ -119,8 +120,9 @@ fn no_part_in_view_gives_feature_not_found() {
             Ok(l) => panic!("{}: found a line in an empty view: {l:?}", e.name),
         }
     }
-    let results = vision::detect_bearing(&gray, &cam, &geo, tcp, [0.0, 0.0], task.omega.size_trans);
+    let results = vision::detect_edges(&gray, &cam, &model, tcp, [0.0; 3], task.omega.size_trans, Detector::Gradient);
     assert!(results.iter().all(|r| r.found.is_err()), "{results:?}");
+    assert_eq!(Features::of(&results, &cam), None);
 }
 
 #[test]
@@ -128,15 +130,22 @@ fn camera_model_is_mujocos_camera() {
     let (_, mut view, _) = bearing();
     view.place([0.0, 0.0], [0.0, 0.0, view.approach_height()]);
     let cam = view.camera();
-    let spec = view.spec().camera.clone().expect("scene camera");
+    let spec = view.spec().camera.clone().expect("scene camera").camera;
     assert_eq!((cam.width, cam.height), (640, 480));
     assert!((cam.fovy - spec.fovy).abs() < 1e-12);
     assert!((cam.focal() - 240.0 / 6f64.to_radians().tan()).abs() < 1e-9);
+    let xyaxes = spec.xyaxes();
     for k in 0..3 {
         assert!((cam.pos[k] - spec.pos[k]).abs() < 1e-12, "pos {:?} vs {:?}", cam.pos, spec.pos);
         // Columns 0 and 1 of cam_xmat are the MJCF xyaxes (unit vectors here).
-        assert!((cam.xmat[3 * k] - spec.xyaxes[k]).abs() < 1e-9, "{:?}", cam.xmat);
-        assert!((cam.xmat[3 * k + 1] - spec.xyaxes[3 + k]).abs() < 1e-9, "{:?}", cam.xmat);
+        assert!((cam.xmat[3 * k] - xyaxes[k]).abs() < 1e-9, "{:?}", cam.xmat);
+        assert!((cam.xmat[3 * k + 1] - xyaxes[3 + k]).abs() < 1e-9, "{:?}", cam.xmat);
+    }
+    // The designed camera (what the scene generator wrote) and MuJoCo's project every
+    // point of the work cell alike: within 1e-6 px.
+    for p in [[0.0, 0.0, 0.0], [0.01, 0.02, 0.016], [-0.02, -0.02, 0.03], [0.005, -0.011, 0.012]] {
+        let (a, b) = (cam.project(p).expect("in front"), spec.project(p).expect("in front"));
+        assert!((a[0] - b[0]).hypot(a[1] - b[1]) < 1e-6, "{p:?}: MuJoCo {a:?}, designed {b:?}");
     }
     // The optical axis (-z) projects to the image centre, camera x to the right, y up.
     let z = [cam.xmat[2], cam.xmat[5], cam.xmat[8]];
@@ -159,7 +168,7 @@ fn harness_render_writes_the_image_and_the_edge_distances() {
         .expect("harness runs");
     let text = String::from_utf8_lossy(&run.stdout);
     assert!(run.status.success(), "{text}{}", String::from_utf8_lossy(&run.stderr));
-    for want in ["housing.left", "housing.right", "seat.left", "seat.right", "vision.left_distance", "vision.right_distance"] {
+    for want in ["active.left", "active.right", "passive.left", "passive.right", "vision.left_distance", "vision.right_distance", "vision.passive_left"] {
         assert!(text.contains(want), "no {want} in:\n{text}");
     }
     assert!(!text.contains("not found"), "{text}");
@@ -170,29 +179,31 @@ fn harness_render_writes_the_image_and_the_edge_distances() {
     // A task without a camera is refused with a clear message.
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_harness")).args(["render", "--task", "peg_in_hole", "--out"]).arg(&out).output().expect("harness runs");
     let err = String::from_utf8_lossy(&run.stderr);
-    assert!(!run.status.success() && err.contains("no vision edges"), "{err}");
+    assert!(!run.status.success() && err.contains("no vision features"), "{err}");
 }
 
 #[test]
-fn measured_edge_distances_match_the_true_ones() {
+fn measured_features_match_the_particle_side_model() {
     let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    let (task, mut view, geo) = bearing();
-    for object in [[0.0, 0.0], [0.003, 0.004], [-0.002, -0.0045]] {
-        let tcp = [0.0, 0.0, view.approach_height()];
+    let (task, mut view, model) = bearing();
+    // At the approach height and resting on the seat's top (a contact), parts in several places.
+    for (object, tcp) in [([0.0, 0.0], [0.0, 0.0, 0.0]), ([0.003, 0.004], [0.0, 0.0, 0.0]), ([-0.002, -0.0045], [0.001, -0.0005, 0.0]), ([0.0045, -0.002], [0.0, 0.0, 0.012])] {
+        let tcp = [tcp[0], tcp[1], if tcp[2] > 0.0 { tcp[2] } else { view.approach_height() }];
         view.place(object, tcp);
         let image = view.render().expect("offscreen rendering (Mesa EGL)");
         let cam = view.camera();
         let mut gray = image.to_gray();
         vision::add_noise(&mut gray, 5.0, 11);
-        let r = vision::detect_bearing(&gray, &cam, &geo, tcp, object, task.omega.size_trans);
-        let v = cam.project(tcp).expect("tcp in view")[1];
-        for side in ["left", "right"] {
-            let get = |n: &str| r.iter().find(|e| e.name == format!("{n}.{side}")).expect("edge");
-            let (h, s) = (get("housing"), get("seat"));
-            let measured = vision::u_distance(h.found.as_ref().expect("housing edge"), s.found.as_ref().expect("seat edge"), v);
-            let truth = vision::u_distance(&h.truth, &s.truth, v);
-            println!("object {object:?} {side}: distance {measured:.3} px, true {truth:.3} px");
-            assert!((measured - truth).abs() < 0.5, "{side} at {object:?}: {measured} vs {truth}");
+        let object = [object[0], object[1], 0.0];
+        let r = vision::detect_edges(&gray, &cam, &model, tcp, object, task.omega.size_trans, Detector::Gradient);
+        let f = Features::of(&r, &cam).unwrap_or_else(|| panic!("all four edges at {object:?}: {r:?}"));
+        // What the FMU computes for a particle at the true pose.
+        let d = model.distances(tcp, object).expect("in view");
+        let p = model.passive.columns(&cam, object).expect("in view");
+        for k in 0..2 {
+            println!("object {object:?} tcp {tcp:?} side {k}: distance {:.3} px (model {:.3}), passive column {:.3} px (model {:.3})", f.distances[k], d[k], f.passive[k], p[k]);
+            assert!((f.distances[k] - d[k]).abs() < 0.5, "{object:?} side {k}: {f:?} vs {d:?}");
+            assert!((f.passive[k] - p[k]).abs() < 0.5, "{object:?} side {k}: {f:?} vs {p:?}");
         }
     }
 }

@@ -1,0 +1,77 @@
+//! The camera as a trial's second sensor (experiment D): renders the scene as the trial left
+//! it, detects the vision model's edges where the model expects them, and hands back the
+//! relative features that the FMU compares per particle.
+
+use std::time::Instant;
+
+use ftmap::Task;
+use ftmap::vision::VisionModel;
+
+use crate::camera::CameraScene;
+use crate::error::{HarnessError, Result};
+use crate::scene::{SceneSpec, scene_path};
+use crate::vision::{self, Detector, EdgeResult, Features};
+
+/// What one image gave.
+#[derive(Debug, Clone)]
+pub struct Look {
+    /// The features, when all four edges were found.
+    pub features: Option<Features>,
+    /// Every edge's detection.
+    pub edges: Vec<EdgeResult>,
+    /// Wall-clock time of rendering and detection (s).
+    pub wall: f64,
+}
+
+/// The task's camera with its vision model.
+pub struct Eye {
+    scene: CameraScene,
+    model: VisionModel,
+    size_trans: f64,
+    noise: f64,
+    detector: Detector,
+}
+
+impl Eye {
+    /// The camera of `task`'s scene, its vision model calibrated from MuJoCo's camera,
+    /// Gaussian image noise of `noise` grey levels, and the line detector.
+    ///
+    /// # Errors
+    /// When the task's scene has no camera or the task no vision features.
+    pub fn open(task: &Task, noise: f64, detector: Detector) -> Result<Self> {
+        let spec = SceneSpec::of_task(task)?;
+        let scene = CameraScene::load(&scene_path(task), spec)?;
+        let model = vision::task_model(task, scene.camera())
+            .ok_or_else(|| HarnessError::Invalid { what: "vision", reason: format!("task {} has no vision features (only bearing_housing has)", task.name) })?;
+        Ok(Self { scene, model, size_trans: task.omega.size_trans, noise, detector })
+    }
+
+    /// The vision model (the camera as MuJoCo places it, the parts' features).
+    pub fn model(&self) -> &VisionModel {
+        &self.model
+    }
+
+    /// The task frame's height before a contact motion (m).
+    pub fn approach_height(&self) -> f64 {
+        self.scene.approach_height()
+    }
+
+    /// Renders part B at `object` and the task frame at `tcp` (m), adds the image noise
+    /// (seeded by `seed`) and detects the edges.
+    ///
+    /// # Errors
+    /// When rendering fails.
+    pub fn look(&mut self, object: [f64; 2], tcp: [f64; 3], seed: u64) -> Result<Look> {
+        let start = Instant::now();
+        self.scene.place(object, tcp);
+        let image = self.scene.render()?;
+        let cam = self.scene.camera();
+        let mut gray = image.to_gray();
+        if self.noise > 0.0 {
+            vision::add_noise(&mut gray, self.noise, seed);
+        }
+        let edges = vision::detect_edges(&gray, &cam, &self.model, tcp, [object[0], object[1], 0.0], self.size_trans, self.detector);
+        let features = Features::of(&edges, &cam);
+        Ok(Look { features, edges, wall: start.elapsed().as_secs_f64() })
+    }
+}

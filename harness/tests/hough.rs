@@ -1,0 +1,98 @@
+//! The bounded Hough line detector on rendered images of the bearing housing scene
+//! (experiment D): against the ground truth projected from the scene's geometry and against
+//! the gradient detector of Fig. 5 (`detect_line`). Its speed: `harness render --bench`.
+
+use std::sync::Mutex;
+
+use ftmap::Task;
+use ftmap::vision::VisionModel;
+use harness::camera::CameraScene;
+use harness::hough::{HoughParams, detect_line_hough};
+use harness::scene::{SceneSpec, scene_path};
+use harness::vision::{self, Gradient, Line, VisionError};
+
+/// One offscreen GL context at a time.
+static GL: Mutex<()> = Mutex::new(());
+
+fn bearing() -> (Task, CameraScene, VisionModel) {
+    let task = Task::find("bearing_housing").expect("task bearing_housing");
+    let spec = SceneSpec::of_task(&task).expect("its scene description");
+    let view = CameraScene::load(&scene_path(&task), spec).expect("its committed scene with camera `vision`");
+    let model = vision::task_model(&task, view.camera()).expect("bearing housing features");
+    (task, view, model)
+}
+
+/// Angle (degrees) and offset (px) of `a` minus those of `b`, across the +-90 degree wrap
+/// (where the normal, and so the offset's sign, flips).
+fn diff(a: &Line, b: &Line) -> (f64, f64) {
+    let da = a.angle - b.angle;
+    if da > 90.0 {
+        (da - 180.0, a.offset + b.offset)
+    } else if da < -90.0 {
+        (da + 180.0, a.offset + b.offset)
+    } else {
+        (da, a.offset - b.offset)
+    }
+}
+
+#[test]
+fn hough_edges_match_the_projected_geometry_and_detect_line() {
+    let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (task, mut view, model) = bearing();
+    let cases = [([0.0, 0.0], [0.0, 0.0]), ([0.002, -0.003], [0.0, 0.0]), ([-0.004, 0.0045], [0.0, 0.0]), ([0.001, 0.002], [0.0005, -0.001])];
+    for (k, (object, tcp_xy)) in cases.iter().enumerate() {
+        let tcp = [tcp_xy[0], tcp_xy[1], view.approach_height()];
+        view.place(*object, tcp);
+        let image = view.render().expect("offscreen rendering (Mesa EGL)");
+        let cam = view.camera();
+        for noise in [None, Some(k as u64 + 1)] {
+            let mut gray = image.to_gray();
+            if let Some(seed) = noise {
+                vision::add_noise(&mut gray, 5.0, seed);
+            }
+            let grad = Gradient::sobel(cam.width, cam.height, &gray);
+            // Expected endpoints, bands (the passive part's covers Omega), truth and detect_line's result.
+            let results = vision::detect_edges_in(&grad, &cam, &model, tcp, [object[0], object[1], 0.0], task.omega.size_trans, vision::Detector::Gradient);
+            assert_eq!(results.len(), 4, "four edges expected");
+            for r in &results {
+                let ends = [r.expected.p0, r.expected.p1];
+                let params = HoughParams { band: r.band, ..HoughParams::default() };
+                let l = detect_line_hough(&grad, ends, &params).unwrap_or_else(|e| panic!("{} at object {object:?} (noise {noise:?}): {e}", r.name));
+                let g = r.found.as_ref().unwrap_or_else(|e| panic!("detect_line, {} at object {object:?}: {e}", r.name));
+                let (da, doff) = diff(&l, &r.truth);
+                let (dga, dgoff) = diff(&l, g);
+                println!(
+                    "object {object:?} tcp {tcp_xy:?} noise {noise:?} {} (band {:.1} px): d_angle {da:.4} deg, d_offset {doff:.3} px; vs detect_line {dga:.4} deg, {dgoff:.3} px",
+                    r.name, r.band
+                );
+                assert!(da.abs() < 0.2, "{} at {object:?} (noise {noise:?}): angle error {da} deg", r.name);
+                assert!(doff.abs() < 0.5, "{} at {object:?} (noise {noise:?}): offset error {doff} px", r.name);
+                assert!(dgoff.abs() < 0.3, "{} at {object:?} (noise {noise:?}): {dgoff} px from detect_line's {g:?}", r.name);
+            }
+        }
+    }
+}
+
+#[test]
+fn no_part_in_view_gives_feature_not_found() {
+    let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (_, mut view, model) = bearing();
+    let tcp = [0.0, 0.0, view.approach_height()];
+    view.place([0.0, 0.0], tcp);
+    let expected = vision::model_edges(&model, &view.camera(), tcp, [0.0; 3]);
+    // Both parts moved 1 m aside: nothing in the camera's view.
+    view.place([0.0, 1.0], [0.0, 1.0, tcp[2]]);
+    let image = view.render().expect("offscreen rendering (Mesa EGL)");
+    let cam = view.camera();
+    let mut gray = image.to_gray();
+    vision::add_noise(&mut gray, 5.0, 3);
+    let grad = Gradient::sobel(cam.width, cam.height, &gray);
+    assert_eq!(expected.len(), 4, "four edges expected");
+    for e in &expected {
+        let ends = e.project(&cam).expect("projected");
+        match detect_line_hough(&grad, ends, &HoughParams { band: 60.0, ..HoughParams::default() }) {
+            Err(VisionError::FeatureNotFound(why)) => println!("{}: feature not found: {why}", e.name),
+            Ok(l) => panic!("{}: found a line in an empty view: {l:?}", e.name),
+        }
+    }
+}
