@@ -40,6 +40,9 @@ impl Eye {
     /// When the task's scene has no camera or the task no vision features.
     pub fn open(task: &Task, noise: f64, detector: Detector) -> Result<Self> {
         let spec = SceneSpec::of_task(task)?;
+        if spec.camera.is_none() {
+            return Err(HarnessError::Invalid { what: "vision", reason: format!("task {} has no camera (a [camera] table in its task.toml; bearing_housing has one)", task.name) });
+        }
         let scene = CameraScene::load(&scene_path(task), spec)?;
         let model = vision::task_model(task, scene.camera())
             .ok_or_else(|| HarnessError::Invalid { what: "vision", reason: format!("task {} has no vision features (only bearing_housing has)", task.name) })?;

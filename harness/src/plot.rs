@@ -61,22 +61,28 @@ fn panels(trial: &TrialResult) -> Vec<Panel> {
 }
 
 fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
-    let root = BitMapBackend::new(path, (1500, 540)).into_drawing_area();
+    let root = BitMapBackend::new(path, (1500, 1040)).into_drawing_area();
     root.fill(&WHITE)?;
-    let areas = root.split_evenly((1, 3));
-    let s = size * 1e3;
+    let areas = root.split_evenly((2, 3));
+    let panels = panels(trial);
     let truth = (trial.offset[0] * 1e3, trial.offset[1] * 1e3);
-    for (area, panel) in areas.iter().zip(panels(trial)) {
-        let mut chart = ChartBuilder::on(area)
-            .caption(&panel.caption, ("sans-serif", 20))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(50)
-            .build_cartesian_2d(-s..s, -s..s)?;
+    // Top row: Omega; bottom row: about the true offset, wide enough for every 2-sigma ellipse.
+    let spread = panels.iter().filter_map(|p| p.estimate).map(|e| 2.0 * e.std[0].max(e.std[1]) + (e.object[0] - trial.offset[0]).hypot(e.object[1] - trial.offset[1])).fold(0.0, f64::max);
+    let zoom = (1.2 * spread).clamp(2.5e-4, size) * 1e3;
+    let s = size * 1e3;
+    for (k, area) in areas.iter().enumerate() {
+        let panel = &panels[k % 3];
+        let (xr, yr, caption) = if k < 3 {
+            (-s..s, -s..s, panel.caption.clone())
+        } else {
+            ((truth.0 - zoom)..(truth.0 + zoom), (truth.1 - zoom)..(truth.1 + zoom), format!("{} (zoom)", panel.caption))
+        };
+        let shown: Vec<(f64, f64)> = panel.tcps.iter().copied().filter(|p| xr.contains(&p.0) && yr.contains(&p.1)).collect();
+        let mut chart = ChartBuilder::on(area).caption(caption, ("sans-serif", 20)).margin(10).x_label_area_size(40).y_label_area_size(55).build_cartesian_2d(xr, yr)?;
         chart.configure_mesh().x_desc("object.x [mm]").y_desc("object.y [mm]").draw()?;
         chart.draw_series(std::iter::once(Cross::new(truth, 9, RED.stroke_width(3))))?.label("true offset").legend(|(x, y)| Cross::new((x, y), 5, RED.stroke_width(2)));
         chart
-            .draw_series(panel.tcps.iter().map(|p| TriangleMarker::new(*p, 7, BLACK.filled())))?
+            .draw_series(shown.iter().map(|p| TriangleMarker::new(*p, 7, BLACK.filled())))?
             .label("contact points")
             .legend(|(x, y)| TriangleMarker::new((x, y), 5, BLACK.filled()));
         if let Some(e) = panel.estimate {
@@ -95,7 +101,9 @@ fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
                 .label(format!("estimate, 1/2 sigma (conf {:.2})", e.confidence))
                 .legend(|(x, y)| Circle::new((x, y), 4, BLUE.filled()));
         }
-        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+        if k < 3 {
+            chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+        }
     }
     root.present()?;
     Ok(())

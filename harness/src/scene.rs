@@ -44,9 +44,6 @@ const SOLREF: &str = "0.002 1";
 /// Contact impedance (d0, dwidth, width).
 const SOLIMP: &str = "0.99 0.999 0.0005";
 
-/// Resolution of the vision camera (px): MuJoCo's offscreen buffer is set to it.
-pub const CAMERA_RESOLUTION: [usize; 2] = [640, 480];
-
 /// A calibrated camera of the work cell (experiment D of the paper): MJCF `<camera>`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CameraSpec {
@@ -264,15 +261,7 @@ impl SceneSpec {
         let meshes = cad::meshes(&geometry);
         let file = |role| meshes.iter().find(|m| m.role == role).map(|m| m.file.to_owned()).unwrap_or_default();
         let reach_of = |b_radius: f64| b_radius + task.omega.size_trans * 2f64.sqrt() + 0.001;
-        let camera = match geometry {
-            // Experiment D: looking along x at the housing's and the seat's side edges,
-            // 200 mm in front, aimed between the seat's top and the housing, 8 degrees down.
-            Geometry::BearingHousing { seat_height, .. } => {
-                let camera = Camera::looking_along_x(0.2, seat_height + 0.002, 8f64.to_radians(), 12.0, CAMERA_RESOLUTION);
-                Some(CameraSpec { name: "vision".into(), camera })
-            }
-            _ => None,
-        };
+        let camera = ftmap::vision::task_camera(task)?.map(|camera| CameraSpec { name: "vision".into(), camera });
         let (face, pieces, top) = match geometry {
             Geometry::RoundPeg { peg_radius, hole_radius, hole_depth, block, .. } => {
                 let apothem_circ = hole_radius / (PI / HOLE_SIDES as f64).cos();
@@ -345,8 +334,8 @@ impl SceneSpec {
         let _ = writeln!(x, "  <compiler autolimits=\"true\" angle=\"radian\" meshdir=\".\"/>");
         let _ = writeln!(x, "  <option timestep=\"0.001\" cone=\"elliptic\" gravity=\"0 0 0\"/>");
         let _ = writeln!(x, "  <size njmax=\"6000\" nconmax=\"2000\"/>");
-        if self.camera.is_some() {
-            let [w, h] = CAMERA_RESOLUTION;
+        if let Some(c) = &self.camera {
+            let (w, h) = (c.camera.width, c.camera.height);
             // A strong ambient headlight keeps surfaces seen at grazing angles (silhouettes) bright.
             let _ = writeln!(x, "  <visual><global offwidth=\"{w}\" offheight=\"{h}\"/><headlight ambient=\"0.45 0.45 0.45\" diffuse=\"0.5 0.5 0.5\"/></visual>");
         }

@@ -53,3 +53,15 @@ fn the_launcher_finds_the_library_in_another_folder() {
     let out = harness().args(["scene", "--check"]).env("FTFUSION_MUJOCO_DIR", &dir).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+#[test]
+fn vision_on_a_task_without_a_camera_or_with_the_spiral_is_refused_by_name() {
+    let dir = std::env::temp_dir().join(format!("harness-novision-{}", std::process::id()));
+    let out = harness().args(["trials", "--task", "peg_in_hole", "--trials", "1", "--vision", "--out"]).arg(&dir).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("peg_in_hole has no camera") && err.contains("[camera]"), "{err}");
+    let out = harness().args(["trials", "--task", "bearing_housing", "--trials", "1", "--vision", "--strategy", "spiral", "--out"]).arg(&dir).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--vision needs --strategy pf"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::cad::Geometry;
 use crate::error::{MapError, Result};
+use crate::task::Task;
 
 /// `kind` of a vision model file.
 pub const VISION_KIND: &str = "ftfusion-vision";
@@ -155,6 +156,58 @@ impl Camera {
         }
         Ok(())
     }
+}
+
+/// A task's `[camera]` table: a calibrated camera set up as in experiment D
+/// ([`Camera::looking_along_x`]).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraSetup {
+    /// Distance in front of the goal along -x (m).
+    distance: f64,
+    /// Height at which the optical axis meets the goal's x = 0 plane (m).
+    aim_z: f64,
+    /// Downward tilt (degrees).
+    pitch_deg: f64,
+    /// Vertical field of view (degrees).
+    fovy: f64,
+    /// Image width and height (px).
+    size: [usize; 2],
+}
+
+/// The camera of a task's `[camera]` table; `None` when the task has none.
+///
+/// # Errors
+/// [`MapError::Task`] when the table is malformed or describes no usable camera.
+pub fn task_camera(task: &Task) -> Result<Option<Camera>> {
+    #[derive(Deserialize)]
+    struct WithCamera {
+        camera: Option<CameraSetup>,
+    }
+    let err = |reason: String| MapError::Task {
+        path: task.path.clone(),
+        reason: format!("[camera]: {reason}"),
+    };
+    let text = std::fs::read_to_string(&task.path).map_err(|e| err(e.to_string()))?;
+    let file: WithCamera = toml::from_str(&text).map_err(|e| err(e.to_string()))?;
+    let Some(setup) = file.camera else {
+        return Ok(None);
+    };
+    if !(setup.distance > 0.0 && setup.aim_z.is_finite() && setup.pitch_deg.abs() < 90.0) {
+        return Err(err(format!(
+            "distance {} must be > 0, aim_z finite, |pitch_deg| {} < 90",
+            setup.distance, setup.pitch_deg
+        )));
+    }
+    let camera = Camera::looking_along_x(
+        setup.distance,
+        setup.aim_z,
+        setup.pitch_deg.to_radians(),
+        setup.fovy,
+        setup.size,
+    );
+    camera.check().map_err(err)?;
+    Ok(Some(camera))
 }
 
 /// A part's outline in its xy plane.
@@ -593,6 +646,47 @@ mod tests {
         }
         // Columns no displacement can produce (the part wider than it can look) are refused.
         assert_eq!(m.recalibrated([0.0, 600.0]), None);
+    }
+
+    #[test]
+    fn the_bearing_housing_task_has_experiment_ds_camera_and_others_none() {
+        let task = Task::find("bearing_housing").expect("task");
+        let cam = task_camera(&task)
+            .expect("valid [camera]")
+            .expect("a camera");
+        assert_eq!((cam.width, cam.height, cam.fovy), (640, 480, 12.0));
+        // 200 mm in front, looking along +x: the optical axis meets x = 0 at the aim height.
+        let axis = [-cam.xmat[2], -cam.xmat[5], -cam.xmat[8]];
+        let t = -cam.pos[0] / axis[0];
+        assert!(
+            (cam.pos[0] + 0.2).abs() < 1e-12 && (cam.pos[2] + t * axis[2] - 0.014).abs() < 1e-12,
+            "{cam:?}"
+        );
+        assert_eq!(
+            task_camera(&Task::find("peg_in_hole").expect("task")).expect("no table is fine"),
+            None
+        );
+        let dir = std::env::temp_dir().join(format!("ftmap-camera-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let text = std::fs::read_to_string(&task.path).expect("task file");
+        for (bad, needle) in [
+            (text.replace("fovy = 12.0", "fovy = 200.0"), "fovy"),
+            (text.replace("size = [640, 480]", "size = [640]"), "size"),
+        ] {
+            let path = dir.join("task.toml");
+            std::fs::write(&path, bad).expect("write");
+            let e = task_camera(&Task {
+                path,
+                ..task.clone()
+            })
+            .expect_err(needle)
+            .to_string();
+            assert!(
+                e.contains("[camera]") && e.contains(needle) && e.contains("task.toml"),
+                "{e}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
