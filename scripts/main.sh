@@ -19,5 +19,6 @@ target/release/harness scene --check
 target/release/harness trials --task peg_in_hole --trials 20 --seed 7 --out runs/peg
 target/release/harness trials --task bearing_housing --trials 20 --seed 3 --vision --out runs/d_vision
 target/release/harness trials --task bearing_housing --trials 20 --seed 3 --out runs/d_force
+target/release/harness compare-runs runs/d_vision runs/d_force --plot runs/d_compare.png
 target/release/harness render --task bearing_housing --out out/d.png
-echo "main: report in runs/peg/ (summary.json, trials.csv, estimates.png), experiment D in runs/d_vision/ and runs/d_force/; map out/peg.ftmap, plot out/peg_ty.png, camera image out/d.png"
+echo "main: report in runs/peg/ (summary.json, trials.csv, estimates.png), experiment D in runs/d_vision/ and runs/d_force/ (compared: runs/d_compare.png); map out/peg.ftmap, plot out/peg_ty.png, camera image out/d.png"

@@ -579,6 +579,7 @@ impl Instance {
                         e.clusters
                     ),
                 );
+                let mut status = Status::Ok;
                 if report.vision_unused {
                     let why = if self.filter.as_ref().is_some_and(|f| f.vision().is_some()) {
                         "no camera displacement fits the passive part's detected edges (vision_method 1)"
@@ -593,7 +594,7 @@ impl Instance {
                             self.time
                         ),
                     );
-                    return Ok(Status::Warning);
+                    status = Status::Warning;
                 }
                 if report.respread > 0 {
                     self.log(
@@ -605,9 +606,9 @@ impl Instance {
                             self.time, report.respread
                         ),
                     );
-                    return Ok(Status::Warning);
+                    status = Status::Warning;
                 }
-                Ok(Status::Ok)
+                Ok(status)
             }
             Err(e @ FusionError::NonFinite { .. }) => {
                 self.log(

@@ -204,6 +204,64 @@ pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
     w.flush().map_err(|e| HarnessError::io(path, e))
 }
 
+/// One row of a `trials.csv`, read back (the columns a comparison needs).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+pub struct TrialRow {
+    /// True offset x (m).
+    pub offset_x_m: f64,
+    /// True offset y (m).
+    pub offset_y_m: f64,
+    /// Contact motions.
+    pub contacts: usize,
+    /// Contact measurements.
+    pub measurements: usize,
+    /// Whether the part went in.
+    pub success: bool,
+    /// `object.y_std` after the first contact measurement (m), if there was one.
+    pub y_std_first_contact_m: Option<f64>,
+}
+
+/// Reads a campaign's `trials.csv`.
+///
+/// # Errors
+/// When the file cannot be read or a row lacks a column or holds a malformed value.
+pub fn read_trials_csv(path: &Path) -> Result<Vec<TrialRow>> {
+    let bad = |e: csv::Error| HarnessError::Invalid { what: "trials.csv", reason: format!("{}: {e}", path.display()) };
+    let mut r = csv::Reader::from_path(path).map_err(bad)?;
+    r.deserialize().collect::<std::result::Result<Vec<TrialRow>, _>>().map_err(bad)
+}
+
+/// Two campaigns side by side (contacts, contact measurements, y spread), and, when they ran
+/// the same true offsets, in how many trials the first needed fewer, as many or more contacts.
+pub fn comparison_table(names: [&str; 2], runs: [&[TrialRow]; 2]) -> String {
+    let stats = |r: &[TrialRow], f: fn(&TrialRow) -> f64| ContactStats::of(r.iter().map(f).collect());
+    let row = |label: &str, f: &dyn Fn(&[TrialRow]) -> String| format!("  {label:<44} {:>22} {:>22}\n", f(runs[0]), f(runs[1]));
+    let quartet = |c: ContactStats| format!("{:.2} / {} / {} / {}", c.mean, c.median, c.p95, c.max);
+    let mut out = format!("  {:<44} {:>22} {:>22}\n", "", names[0], names[1]);
+    out += &row("trials", &|r| r.len().to_string());
+    out += &row("success rate", &|r| format!("{:.1} %", 100.0 * r.iter().filter(|t| t.success).count() as f64 / r.len().max(1) as f64));
+    out += &row("contacts mean / median / p95 / max", &|r| quartet(stats(r, |t| t.contacts as f64)));
+    out += &row("contact measurements mean / median / p95 / max", &|r| quartet(stats(r, |t| t.measurements as f64)));
+    out += &row("object.y_std after the first contact (mean)", &|r| {
+        let v: Vec<f64> = r.iter().filter_map(|t| t.y_std_first_contact_m).collect();
+        if v.is_empty() { "-".into() } else { format!("{:.4} mm", 1e3 * v.iter().sum::<f64>() / v.len() as f64) }
+    });
+    let paired = runs[0].len() == runs[1].len() && runs[0].iter().zip(runs[1]).all(|(a, b)| (a.offset_x_m - b.offset_x_m).abs() < 1e-9 && (a.offset_y_m - b.offset_y_m).abs() < 1e-9);
+    if paired {
+        let count = |f: fn(usize, usize) -> bool| runs[0].iter().zip(runs[1]).filter(|(a, b)| f(a.contacts, b.contacts)).count();
+        out += &format!(
+            "  same true offsets: {} needed fewer contacts in {}, as many in {}, more in {} trials\n",
+            names[0],
+            count(|a, b| a < b),
+            count(|a, b| a == b),
+            count(|a, b| a > b)
+        );
+    } else {
+        out += "  the campaigns ran different true offsets: no trial-by-trial comparison\n";
+    }
+    out
+}
+
 /// `object.y_std` after a trial's first contact measurement.
 fn first_contact_y_std(r: &TrialResult) -> Option<f64> {
     r.steps.iter().find_map(|s| s.estimate).map(|e| e.std[1])

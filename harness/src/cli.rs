@@ -1,4 +1,4 @@
-//! The command line: `harness scene | trials | sweep | scan | compare-maps`.
+//! The command line: `harness render | scene | trials | sweep | scan | compare-runs | compare-maps`.
 
 use std::path::{Path, PathBuf};
 
@@ -105,6 +105,17 @@ pub enum Command {
         /// Half width of the scanned square (mm); default: Omega's size_trans.
         #[arg(long)]
         size: Option<f64>,
+    },
+    /// Two campaigns side by side (their trials.csv): contacts, contact measurements, y
+    /// spread, trial by trial when they ran the same offsets; writes a plot.
+    CompareRuns {
+        /// First campaign's output folder.
+        a: PathBuf,
+        /// Second campaign's output folder.
+        b: PathBuf,
+        /// Bar plot of the contacts per trial.
+        #[arg(long, default_value = "out/compare_runs.png")]
+        plot: PathBuf,
     },
     /// Per-channel agreement of two maps over the cells of the first; writes a plot.
     CompareMaps {
@@ -357,6 +368,15 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
         Command::CompareMaps { a, b, plot: png } => compare_cmd(&a, &b, &png),
+        Command::CompareRuns { a, b, plot: png } => {
+            let (ra, rb) = (campaign::read_trials_csv(&a.join("trials.csv"))?, campaign::read_trials_csv(&b.join("trials.csv"))?);
+            let name = |p: &Path| p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned());
+            let names = [name(&a), name(&b)];
+            print!("{}", campaign::comparison_table([&names[0], &names[1]], [&ra, &rb]));
+            plot::contacts_per_trial(&png, [&names[0], &names[1]], [&ra, &rb])?;
+            println!("plot {}", png.display());
+            Ok(())
+        }
     }
 }
 

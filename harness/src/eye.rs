@@ -2,26 +2,13 @@
 //! it, detects the vision model's edges where the model expects them, and hands back the
 //! relative features that the FMU compares per particle.
 
-use std::time::Instant;
-
 use ftmap::Task;
 use ftmap::vision::VisionModel;
 
 use crate::camera::CameraScene;
 use crate::error::{HarnessError, Result};
 use crate::scene::{SceneSpec, scene_path};
-use crate::vision::{self, Detector, EdgeResult, Features};
-
-/// What one image gave.
-#[derive(Debug, Clone)]
-pub struct Look {
-    /// The features, when all four edges were found.
-    pub features: Option<Features>,
-    /// Every edge's detection.
-    pub edges: Vec<EdgeResult>,
-    /// Wall-clock time of rendering and detection (s).
-    pub wall: f64,
-}
+use crate::vision::{self, Detector, Features};
 
 /// The task's camera with its vision model.
 pub struct Eye {
@@ -60,12 +47,12 @@ impl Eye {
     }
 
     /// Renders part B at `object` and the task frame at `tcp` (m), adds the image noise
-    /// (seeded by `seed`) and detects the edges.
+    /// (seeded by `seed`) and detects the edges: the features, or `None` unless all four
+    /// edges were found.
     ///
     /// # Errors
     /// When rendering fails.
-    pub fn look(&mut self, object: [f64; 2], tcp: [f64; 3], seed: u64) -> Result<Look> {
-        let start = Instant::now();
+    pub fn look(&mut self, object: [f64; 2], tcp: [f64; 3], seed: u64) -> Result<Option<Features>> {
         self.scene.place(object, tcp);
         let image = self.scene.render()?;
         let cam = self.scene.camera();
@@ -74,7 +61,6 @@ impl Eye {
             vision::add_noise(&mut gray, self.noise, seed);
         }
         let edges = vision::detect_edges(&gray, &cam, &self.model, tcp, [object[0], object[1], 0.0], self.size_trans, self.detector);
-        let features = Features::of(&edges, &cam);
-        Ok(Look { features, edges, wall: start.elapsed().as_secs_f64() })
+        Ok(Features::of(&edges, &cam))
     }
 }

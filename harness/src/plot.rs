@@ -1,6 +1,6 @@
 //! Plots a person looks at (PNG): the estimate after the first measurements of a trial (the
 //! paper's Fig. 8, and Fig. 12 with a camera; the FMU exposes no particles, so each panel
-//! shows the estimate and its 1- and 2-sigma ellipses), contacts per true offset of a sweep (Fig. 10), and the
+//! shows the estimate and its 1- and 2-sigma ellipses), contacts per trial of two campaigns, contacts per true offset of a sweep (Fig. 10), and the
 //! agreement of two maps.
 
 use std::path::Path;
@@ -8,6 +8,7 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use crate::error::{HarnessError, Result};
+use crate::campaign::TrialRow;
 use crate::fmu_driver::Estimate;
 use crate::trial::TrialResult;
 
@@ -105,6 +106,44 @@ fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
             chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
         }
     }
+    root.present()?;
+    Ok(())
+}
+
+/// Contact motions per trial of two campaigns (e.g. experiment D with and without vision).
+///
+/// # Errors
+/// When the image cannot be written.
+pub fn contacts_per_trial(path: &Path, names: [&str; 2], runs: [&[TrialRow]; 2]) -> Result<()> {
+    ensure_dir(path)?;
+    wrap(path, draw_contacts_per_trial(path, names, runs))
+}
+
+fn draw_contacts_per_trial(path: &Path, names: [&str; 2], runs: [&[TrialRow]; 2]) -> Draw {
+    let root = BitMapBackend::new(path, (1000, 520)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let n = runs[0].len().max(runs[1].len()).max(1);
+    let top = runs.iter().flat_map(|r| r.iter().map(|t| t.contacts)).max().unwrap_or(1) as f64 + 1.0;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("contact motions per trial", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(-0.5..n as f64 - 0.5, 0.0..top)?;
+    chart.configure_mesh().x_desc("trial").y_desc("contacts").draw()?;
+    for (k, (name, run)) in names.iter().zip(runs).enumerate() {
+        let colour = if k == 0 { BLUE } else { RED };
+        let dx = if k == 0 { -0.15 } else { 0.15 };
+        let mean = run.iter().map(|t| t.contacts as f64).sum::<f64>() / run.len().max(1) as f64;
+        chart
+            .draw_series(run.iter().enumerate().map(|(i, t)| {
+                let style = if t.success { colour.filled() } else { BLACK.filled() };
+                Rectangle::new([(i as f64 + dx - 0.13, 0.0), (i as f64 + dx + 0.13, t.contacts as f64)], style)
+            }))?
+            .label(format!("{name} (mean {mean:.2}; black: failed)"))
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], colour.filled()));
+    }
+    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
     root.present()?;
     Ok(())
 }

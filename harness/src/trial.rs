@@ -138,7 +138,7 @@ pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, mut eye: Option<&mut Eye>, cf
     let (mut first_look, mut images_missed) = (None, 0);
     if let (Some(e), Some(eye)) = (estimator.as_mut(), eye.as_deref_mut()) {
         let tcp = [target[0], target[1], eye.approach_height()];
-        match eye.look(offset, tcp, seed)?.features {
+        match eye.look(offset, tcp, seed)? {
             Some(f) => {
                 let est = e.look(tcp, &f)?;
                 target = est.object;
@@ -165,7 +165,7 @@ pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, mut eye: Option<&mut Eye>, cf
         }
         let image = match (&estimator, eye.as_deref_mut()) {
             (Some(_), Some(eye)) => {
-                let f = eye.look(offset, c.tcp, seed.wrapping_add(steps.len() as u64 + 1))?.features;
+                let f = eye.look(offset, c.tcp, seed.wrapping_add(steps.len() as u64 + 1))?;
                 images_missed += usize::from(f.is_none());
                 f
             }

@@ -65,3 +65,27 @@ fn vision_on_a_task_without_a_camera_or_with_the_spiral_is_refused_by_name() {
     assert!(!out.status.success() && err.contains("--vision needs --strategy pf"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn compare_runs_tabulates_two_campaigns_and_names_a_bad_file() {
+    let dir = std::env::temp_dir().join(format!("harness-compare-{}", std::process::id()));
+    let head = "trial,offset_x_m,offset_y_m,contacts,measurements,success,final_error_m,y_std_first_contact_m,images_missed,wall_s,sim_time_s\n";
+    let runs = [("a", [(1, "0.000002"), (2, "0.000004"), (3, "")]), ("b", [(3, "0.00006"), (2, "0.00008"), (6, "")])];
+    for (name, rows) in runs {
+        std::fs::create_dir_all(dir.join(name)).unwrap();
+        let body: String = rows.iter().enumerate().map(|(i, (c, y))| format!("{i},0.00{i},-0.001,{c},{},true,0.00003,{y},0,0.1,0.3\n", c - 1)).collect();
+        std::fs::write(dir.join(name).join("trials.csv"), format!("{head}{body}")).unwrap();
+    }
+    let out = harness().arg("compare-runs").arg(dir.join("a")).arg(dir.join("b")).arg("--plot").arg(dir.join("c.png")).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    for want in ["2.00 / 2 / 3 / 3", "3.67 / 3 / 6 / 6", "1.00 / 1 / 2 / 2", "0.0030 mm", "0.0700 mm", "a needed fewer contacts in 2, as many in 1, more in 0 trials"] {
+        assert!(text.contains(want), "no {want:?} in:\n{text}");
+    }
+    assert!(dir.join("c.png").is_file());
+    std::fs::write(dir.join("b").join("trials.csv"), format!("{head}0,0.0,0.0,three,2,true,0,,0,0,0\n")).unwrap();
+    let out = harness().arg("compare-runs").arg(dir.join("a")).arg(dir.join("b")).arg("--plot").arg(dir.join("c.png")).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("b/trials.csv"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

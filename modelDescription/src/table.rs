@@ -578,7 +578,7 @@ pub const VARIABLES: &[Variable] = &[
         327,
         Integer,
         "",
-        "Contact measurements used so far",
+        "Measurements used so far: contacts, and images taken alone",
     ),
     output(
         "clusters",

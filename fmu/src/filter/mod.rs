@@ -254,10 +254,10 @@ impl Filter {
         }
     }
 
-    /// Takes one measurement: `iterations` rounds of jitter (but before the filter's first
+    /// Takes one measurement: `iterations` rounds of jitter (not before the filter's first
     /// weighing), weight (Eq. 3), normalise and resample (when ESS <= N/2), then a new
-    /// estimate. A measurement with a non-finite
-    /// value is refused and changes nothing; so is an image alone that cannot be used.
+    /// estimate. A measurement with a non-finite value is refused and changes nothing; an
+    /// image alone that cannot be used changes nothing either.
     pub fn measure(&mut self, m: &Measurement) -> Result<Report> {
         Self::check(m)?;
         let vision = match (&self.vision, &m.vision) {

@@ -61,16 +61,6 @@ impl VisionSense {
         }
     }
 
-    /// The model.
-    pub fn model(&self) -> &VisionModel {
-        &self.model
-    }
-
-    /// The evaluation method.
-    pub fn method(&self) -> VisionMethod {
-        self.method
-    }
-
     /// Prepares one image's detections for a TCP pose; `None` when recalibration finds no
     /// camera displacement that fits the passive part's detected edges.
     pub fn prepare(&self, m: &VisionMeasurement, tcp: &[f64; 6]) -> Option<Prepared> {
