@@ -64,21 +64,11 @@ pub fn peg_map(size: f64, step: f64, rot: Option<(f64, f64)>) -> ftmap::Result<F
     Ok(map)
 }
 
-/// Experiment D's vision model: the bearing housing's box and seat seen by a camera 200 mm
-/// in front of the goal along -x, 8 degrees down, 640 x 480 px, fovy 12 degrees.
-pub fn bearing_vision() -> ftmap::vision::VisionModel {
-    use ftmap::cad::Geometry;
-    use ftmap::vision::{Camera, VisionModel};
-    let camera = Camera::looking_along_x(0.2, 0.014, 8f64.to_radians(), 12.0, [640, 480]);
-    let g = Geometry::BearingHousing {
-        housing: [0.04, 0.04, 0.016],
-        bore_radius: 0.011,
-        seat_radius: 0.01095,
-        seat_height: 0.012,
-        plate: [0.06, 0.06, 0.01],
-        segments: 64,
-    };
-    // Only the bearing housing has features; its geometry above is one.
-    VisionModel::of_geometry(&g, camera)
-        .unwrap_or_else(|| unreachable!("a bearing housing has vision features"))
+/// Experiment D's vision model, from the bearing_housing task's `[camera]` and `[geometry]`.
+#[cfg(test)]
+pub(crate) fn bearing_vision() -> ftmap::vision::VisionModel {
+    let task = ftmap::Task::find("bearing_housing").expect("task bearing_housing");
+    ftmap::vision::VisionModel::of_task(&task)
+        .expect("valid tables")
+        .expect("a camera and features")
 }

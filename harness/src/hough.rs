@@ -239,30 +239,10 @@ fn peak(grad: &Gradient, steep: bool, n: [f32; 2], s: i64, lo: f64, hi: f64) -> 
 mod tests {
     use super::*;
     use crate::vision::add_noise;
+    use crate::vision::tests::step;
 
     const W: usize = 640;
     const H: usize = 480;
-
-    /// A 640x480 image of a straight step edge (grey 40 | 190) through `p` at `angle` degrees,
-    /// anti-aliased by 4x4 supersampling; only where `keep` holds for the position along the
-    /// edge (px from `p`), elsewhere grey 40.
-    fn step(angle: f64, p: [f64; 2], keep: impl Fn(f64) -> bool) -> Vec<f32> {
-        let (s, c) = angle.to_radians().sin_cos();
-        let mut g = vec![0.0f32; W * H];
-        for y in 0..H {
-            for x in 0..W {
-                let mut cov = 0.0;
-                for k in 0..16 {
-                    let (sx, sy) = (x as f64 - 0.375 + 0.25 * f64::from(k % 4), y as f64 - 0.375 + 0.25 * f64::from(k / 4));
-                    if -s * (sx - p[0]) + c * (sy - p[1]) > 0.0 && keep(c * (sx - p[0]) + s * (sy - p[1])) {
-                        cov += 1.0 / 16.0;
-                    }
-                }
-                g[y * W + x] = (40.0 + 150.0 * cov) as f32;
-            }
-        }
-        g
-    }
 
     /// Expected endpoints 240 px apart, `off` px across the true line through `p` and `tilt`
     /// degrees off its direction.

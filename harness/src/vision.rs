@@ -400,12 +400,13 @@ pub fn add_noise(gray: &mut [f32], sigma: f64, seed: u64) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A 640x480 image of a straight step edge (grey 40 | 190) through `p` at `angle` degrees,
-    /// anti-aliased by 4x4 supersampling.
-    fn step(angle: f64, p: [f64; 2]) -> Vec<f32> {
+    /// anti-aliased by 4x4 supersampling; only where `keep` holds for the position along the
+    /// edge (px from `p`), elsewhere grey 40.
+    pub(crate) fn step(angle: f64, p: [f64; 2], keep: impl Fn(f64) -> bool) -> Vec<f32> {
         let (s, c) = angle.to_radians().sin_cos();
         let (w, h) = (640, 480);
         let mut g = vec![0.0f32; w * h];
@@ -414,7 +415,7 @@ mod tests {
                 let mut cov = 0.0;
                 for k in 0..16 {
                     let (sx, sy) = (x as f64 - 0.375 + 0.25 * f64::from(k % 4), y as f64 - 0.375 + 0.25 * f64::from(k / 4));
-                    if -s * (sx - p[0]) + c * (sy - p[1]) > 0.0 {
+                    if -s * (sx - p[0]) + c * (sy - p[1]) > 0.0 && keep(c * (sx - p[0]) + s * (sy - p[1])) {
                         cov += 1.0 / 16.0;
                     }
                 }
@@ -427,7 +428,7 @@ mod tests {
     #[test]
     fn synthetic_edges_are_found_to_a_fraction_of_a_pixel() {
         for (angle, p, seed) in [(80.0, [300.3, 240.0], 1), (-86.5, [200.7, 200.0], 2), (7.0, [320.0, 250.4], 3), (-30.0, [320.0, 240.2], 4)] {
-            let mut g = step(angle, p);
+            let mut g = step(angle, p, |_| true);
             add_noise(&mut g, 5.0, seed);
             let grad = Gradient::sobel(640, 480, &g);
             let truth = Line::through(p, [p[0] + 100.0 * f64::to_radians(angle).cos(), p[1] + 100.0 * f64::to_radians(angle).sin()], 640, 480);

@@ -4,10 +4,10 @@
 use std::sync::Mutex;
 
 use ftmap::Task;
+use ftmap::vision::VisionModel;
 use harness::camera::CameraScene;
 use harness::scene::{SceneSpec, scene_path};
-use ftmap::vision::VisionModel;
-use harness::vision::{self, Detector, Features, Gradient, LineParams, VisionError, detect_line};
+use harness::vision::{self, Detector, Features, Gradient, VisionError};
 
 /// One offscreen GL context at a time.
 static GL: Mutex<()> = Mutex::new(());
@@ -112,12 +112,14 @@ fn no_part_in_view_gives_feature_not_found() {
     let mut gray = image.to_gray();
     vision::add_noise(&mut gray, 5.0, 3);
     let grad = Gradient::sobel(cam.width, cam.height, &gray);
+    assert_eq!(expected.len(), 4, "four edges expected");
     for e in &expected {
         let ends = e.project(&cam).expect("projected");
-        let params = LineParams { band: 60.0, ..LineParams::default() };
-        match detect_line(&grad, ends, &params) {
-            Err(VisionError::FeatureNotFound(why)) => println!("{}: feature not found: {why}", e.name),
-            Ok(l) => panic!("{}: found a line in an empty view: {l:?}", e.name),
+        for d in [Detector::Gradient, Detector::Hough] {
+            match d.detect(&grad, ends, 60.0) {
+                Err(VisionError::FeatureNotFound(why)) => println!("{} ({d:?}): feature not found: {why}", e.name),
+                Ok(l) => panic!("{} ({d:?}): found a line in an empty view: {l:?}", e.name),
+            }
         }
     }
     let results = vision::detect_edges(&gray, &cam, &model, tcp, [0.0; 3], task.omega.size_trans, Detector::Gradient);

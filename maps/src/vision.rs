@@ -393,6 +393,21 @@ impl VisionModel {
         }
     }
 
+    /// A task's vision model: its `[camera]` and the features of its `[geometry]`; `None`
+    /// when it lacks either.
+    ///
+    /// # Errors
+    /// When the task's `[camera]` or `[geometry]` table is malformed.
+    pub fn of_task(task: &Task) -> Result<Option<Self>> {
+        let Some(camera) = task_camera(task)? else {
+            return Ok(None);
+        };
+        Ok(Self::of_geometry(
+            &crate::cad::geometry_of(&task.path)?,
+            camera,
+        ))
+    }
+
     /// The relative features: u-distance (px) from the active part's edge (task frame at
     /// `tcp`) to the passive part's edge (goal frame at `object`), left and right.
     pub fn distances(&self, tcp: [f64; 3], object: [f64; 3]) -> Option<[f64; 2]> {
@@ -497,6 +512,12 @@ impl VisionModel {
 mod tests {
     use super::*;
 
+    /// The bearing housing task's geometry.
+    fn bearing() -> Geometry {
+        crate::cad::geometry_of(&Task::find("bearing_housing").expect("task").path)
+            .expect("its [geometry]")
+    }
+
     /// A camera 200 mm in front of the goal along -x, looking along +x, level (no tilt).
     fn level_camera() -> Camera {
         // x axis (image right) = -y world, y axis (up) = +z world, -z (view) = +x world.
@@ -577,14 +598,7 @@ mod tests {
 
     #[test]
     fn distances_move_with_y_and_hardly_with_x() {
-        let g = Geometry::BearingHousing {
-            housing: [0.04, 0.04, 0.016],
-            bore_radius: 0.011,
-            seat_radius: 0.01095,
-            seat_height: 0.012,
-            plate: [0.06, 0.06, 0.01],
-            segments: 64,
-        };
+        let g = bearing();
         let m = VisionModel::of_geometry(&g, level_camera()).expect("bearing housing has features");
         let d0 = m.distances([0.0; 3], [0.0; 3]).expect("in view");
         let dy = m.distances([0.0; 3], [0.0, 0.001, 0.0]).expect("in view");
@@ -602,14 +616,7 @@ mod tests {
 
     #[test]
     fn recalibration_moves_the_camera_so_the_passive_part_fits_at_its_nominal_pose() {
-        let g = Geometry::BearingHousing {
-            housing: [0.04, 0.04, 0.016],
-            bore_radius: 0.011,
-            seat_radius: 0.01095,
-            seat_height: 0.012,
-            plate: [0.06, 0.06, 0.01],
-            segments: 64,
-        };
+        let g = bearing();
         let m = VisionModel::of_geometry(
             &g,
             Camera::looking_along_x(0.2, 0.014, 8f64.to_radians(), 12.0, [640, 480]),
@@ -693,14 +700,7 @@ mod tests {
     fn files_round_trip_and_bad_ones_are_named() {
         let dir = std::env::temp_dir().join(format!("ftmap-vision-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
-        let g = Geometry::BearingHousing {
-            housing: [0.04, 0.04, 0.016],
-            bore_radius: 0.011,
-            seat_radius: 0.01095,
-            seat_height: 0.012,
-            plate: [0.06, 0.06, 0.01],
-            segments: 64,
-        };
+        let g = bearing();
         let m = VisionModel::of_geometry(&g, level_camera()).expect("features");
         let path = dir.join("m.vision.json");
         m.save(&path).expect("written");

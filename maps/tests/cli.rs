@@ -220,3 +220,46 @@ fn bad_input_gets_an_error_that_names_the_problem() {
     std::fs::remove_dir_all(dir).ok();
     std::fs::remove_dir_all(dir2).ok();
 }
+
+#[test]
+fn vision_writes_the_tasks_model_and_refuses_a_task_without_a_camera() {
+    let dir = std::env::temp_dir().join(format!("ftmap-cli-vision-{}", std::process::id()));
+    let out = dir.join("bearing.vision.json");
+    let text = ok(&[
+        "vision",
+        "--task",
+        "bearing_housing",
+        "--out",
+        out.to_str().expect("utf-8 path"),
+    ]);
+    assert!(text.contains("640x480"), "{text}");
+    let m = ftmap::vision::VisionModel::load(&out).expect("a valid vision model");
+    // task.toml: 200 mm in front, aimed at z = 14 mm on x = 0, 8 degrees down.
+    let want = [-0.2, 0.0, 0.014 + 0.2 * 8f64.to_radians().tan()];
+    assert!(
+        m.camera
+            .pos
+            .iter()
+            .zip(want)
+            .all(|(a, b)| (a - b).abs() < 1e-12),
+        "{:?}",
+        m.camera.pos
+    );
+    assert_eq!(
+        m.passive.outline,
+        ftmap::vision::Outline::Circle { radius: 0.01095 }
+    );
+    let bad = ftmap(&[
+        "vision",
+        "--task",
+        "peg_in_hole",
+        "--out",
+        out.to_str().expect("utf-8 path"),
+    ]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success() && err.contains("peg_in_hole") && err.contains("[camera]"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

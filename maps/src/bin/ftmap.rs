@@ -95,6 +95,16 @@ enum Cmd {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Writes a task's vision model (its [camera] and the silhouette features of its
+    /// [geometry]) as a *.vision.json file for the FMU's `vision` parameter.
+    Vision {
+        /// Task name or path of a task.toml.
+        #[arg(long)]
+        task: String,
+        /// Output file.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Writes (or with --check, verifies) the STL meshes of tasks from their [geometry] tables.
     Cad {
         /// Task name or `all`.
@@ -153,8 +163,33 @@ fn main() -> Result<()> {
             require_gpu,
         } => cmd_bench(&task, &backend, model, require_gpu),
         Cmd::Merge { shards, out } => cmd_merge(&shards, &out),
+        Cmd::Vision { task, out } => cmd_vision(&task, &out),
         Cmd::Cad { task, check } => cmd_cad(&task, check),
     }
+}
+
+fn cmd_vision(task: &str, out: &Path) -> Result<()> {
+    let task = Task::find(task)?;
+    let Some(model) = ftmap::vision::VisionModel::of_task(&task)? else {
+        bail!(
+            "task {} has no vision model: it needs a [camera] table and a [geometry] with silhouette features (bearing_housing has both)",
+            task.name
+        );
+    };
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    model.save(out)?;
+    let c = &model.camera;
+    println!(
+        "wrote {} (camera {}x{} px, fovy {} deg, at {:?} m)",
+        out.display(),
+        c.width,
+        c.height,
+        c.fovy,
+        c.pos
+    );
+    Ok(())
 }
 
 #[cfg_attr(not(feature = "gpu"), allow(unused_variables))]
