@@ -154,6 +154,15 @@ impl Camera {
                 }
             }
         }
+        let (x, y, z) = (col(0), col(1), col(2));
+        let cross = [
+            x[1] * y[2] - x[2] * y[1],
+            x[2] * y[0] - x[0] * y[2],
+            x[0] * y[1] - x[1] * y[0],
+        ];
+        if dot(cross, z) < 0.0 {
+            return Err("camera xmat is a reflection, not a rotation (x cross y is -z)".into());
+        }
         Ok(())
     }
 }
@@ -708,6 +717,7 @@ mod tests {
         let text = std::fs::read_to_string(&path).expect("text");
         for (bad, needle) in [
             (text.replace("\"fovy\": 12.0", "\"fovy\": 0.0"), "fovy"),
+            (text.replacen("-1.0", "1.0", 1), "reflection"),
             (text.replace("ftfusion-vision", "ftmap"), "kind"),
             (
                 text.replace("\"version\": 1", "\"version\": 9"),
