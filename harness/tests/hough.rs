@@ -3,25 +3,15 @@
 //! the gradient detector of Fig. 5 (`detect_line`). An empty view: tests/vision.rs. Its
 //! speed: `harness render --bench`.
 
+mod common;
+
 use std::sync::Mutex;
 
-use ftmap::Task;
-use ftmap::vision::VisionModel;
-use harness::camera::CameraScene;
 use harness::hough::{HoughParams, detect_line_hough};
-use harness::scene::{SceneSpec, scene_path};
 use harness::vision::{self, Gradient, Line};
 
 /// One offscreen GL context at a time.
 static GL: Mutex<()> = Mutex::new(());
-
-fn bearing() -> (Task, CameraScene, VisionModel) {
-    let task = Task::find("bearing_housing").expect("task bearing_housing");
-    let spec = SceneSpec::of_task(&task).expect("its scene description");
-    let view = CameraScene::load(&scene_path(&task), spec).expect("its committed scene with camera `vision`");
-    let model = vision::task_model(&task, view.camera()).expect("bearing housing features");
-    (task, view, model)
-}
 
 /// Angle (degrees) and offset (px) of `a` minus those of `b`, across the +-90 degree wrap
 /// (where the normal, and so the offset's sign, flips).
@@ -39,7 +29,7 @@ fn diff(a: &Line, b: &Line) -> (f64, f64) {
 #[test]
 fn hough_edges_match_the_projected_geometry_and_detect_line() {
     let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    let (task, mut view, model) = bearing();
+    let (task, mut view, model) = common::bearing();
     let cases = [([0.0, 0.0], [0.0, 0.0]), ([0.002, -0.003], [0.0, 0.0]), ([-0.004, 0.0045], [0.0, 0.0]), ([0.001, 0.002], [0.0005, -0.001])];
     for (k, (object, tcp_xy)) in cases.iter().enumerate() {
         let tcp = [tcp_xy[0], tcp_xy[1], view.approach_height()];

@@ -1,6 +1,8 @@
 //! Vision (experiment D): the camera model against MuJoCo's rendering, and line detection
 //! on rendered images against the ground truth projected from the scene's geometry.
 
+mod common;
+
 use std::sync::Mutex;
 
 use ftmap::Task;
@@ -11,14 +13,6 @@ use harness::vision::{self, Detector, Features, Gradient, VisionError};
 
 /// One offscreen GL context at a time.
 static GL: Mutex<()> = Mutex::new(());
-
-fn bearing() -> (Task, CameraScene, VisionModel) {
-    let task = Task::find("bearing_housing").expect("task bearing_housing");
-    let spec = SceneSpec::of_task(&task).expect("its scene description");
-    let view = CameraScene::load(&scene_path(&task), spec).expect("its committed scene with camera `vision`");
-    let model = vision::task_model(&task, view.camera()).expect("bearing housing features");
-    (task, view, model)
-}
 
 /// Detection errors (degrees, px) of all four edges, each asserted found.
 fn errors(task: &Task, view: &mut CameraScene, model: &VisionModel, object: [f64; 2], tcp_xy: [f64; 2], noise: Option<u64>) -> Vec<(String, f64, f64)> {
@@ -44,7 +38,7 @@ fn errors(task: &Task, view: &mut CameraScene, model: &VisionModel, object: [f64
 #[test]
 fn detected_edges_match_the_projected_geometry() {
     let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    let (task, mut view, model) = bearing();
+    let (task, mut view, model) = common::bearing();
     let cases = [([0.0, 0.0], [0.0, 0.0]), ([0.002, -0.003], [0.0, 0.0]), ([-0.004, 0.0045], [0.0, 0.0]), ([0.001, 0.002], [0.0005, -0.001])];
     for (k, (object, tcp)) in cases.iter().enumerate() {
         for noise in [None, Some(k as u64 + 1)] {
@@ -101,7 +95,7 @@ fn camera_model_projects_like_mujoco_renders() {
 #[test]
 fn no_part_in_view_gives_feature_not_found() {
     let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    let (task, mut view, model) = bearing();
+    let (task, mut view, model) = common::bearing();
     let tcp = [0.0, 0.0, view.approach_height()];
     view.place([0.0, 0.0], tcp);
     let expected = vision::model_edges(&model, &view.camera(), tcp, [0.0; 3]);
@@ -129,7 +123,7 @@ fn no_part_in_view_gives_feature_not_found() {
 
 #[test]
 fn camera_model_is_mujocos_camera() {
-    let (_, mut view, _) = bearing();
+    let (_, mut view, _) = common::bearing();
     view.place([0.0, 0.0], [0.0, 0.0, view.approach_height()]);
     let cam = view.camera();
     let spec = view.spec().camera.clone().expect("scene camera").camera;
@@ -187,7 +181,7 @@ fn harness_render_writes_the_image_and_the_edge_distances() {
 #[test]
 fn measured_features_match_the_particle_side_model() {
     let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    let (task, mut view, model) = bearing();
+    let (task, mut view, model) = common::bearing();
     // At the approach height and resting on the seat's top (a contact), parts in several places.
     for (object, tcp) in [([0.0, 0.0], [0.0, 0.0, 0.0]), ([0.003, 0.004], [0.0, 0.0, 0.0]), ([-0.002, -0.0045], [0.001, -0.0005, 0.0]), ([0.0045, -0.002], [0.0, 0.0, 0.012])] {
         let tcp = [tcp[0], tcp[1], if tcp[2] > 0.0 { tcp[2] } else { view.approach_height() }];

@@ -5,9 +5,12 @@
 use std::sync::OnceLock;
 
 use ftmap::generate::{GenerateOptions, generate};
+use ftmap::vision::VisionModel;
 use ftmap::{FtMap, Task};
+use harness::camera::CameraScene;
 use harness::scene::{SceneSpec, scene_path};
 use harness::sim::Sim;
+use harness::vision;
 
 /// The peg_in_hole task and a simulation of its committed scene.
 pub fn peg() -> (Task, Sim) {
@@ -24,4 +27,14 @@ pub fn computed_peg_map() -> &'static FtMap {
         let task = Task::find("peg_in_hole").expect("task peg_in_hole");
         generate(&task, &ftmap::cpu::CpuBackend, &GenerateOptions::default(), &|_| {}).expect("its computed map")
     })
+}
+
+/// The bearing_housing task, its committed scene loaded for the camera, and its vision model
+/// with MuJoCo's camera.
+pub fn bearing() -> (Task, CameraScene, VisionModel) {
+    let task = Task::find("bearing_housing").expect("task bearing_housing");
+    let spec = SceneSpec::of_task(&task).expect("its scene description");
+    let view = CameraScene::load(&scene_path(&task), spec).expect("its committed scene with camera `vision`");
+    let model = vision::task_model(&task, view.camera()).expect("bearing housing features");
+    (task, view, model)
 }
