@@ -14,7 +14,12 @@ use crate::synthetic::{field, peg_map};
 const STEP: f64 = 2.5e-4;
 
 fn filter(seed: u64) -> Filter {
-    let map = peg_map(5e-3, STEP, None).expect("map");
+    filter_at(seed, STEP)
+}
+
+/// A filter with 4000 particles over the analytic map at grid step `step` (m).
+fn filter_at(seed: u64, step: f64) -> Filter {
+    let map = peg_map(5e-3, step, None).expect("map");
     Filter::new(
         &map,
         Path::new("synthetic"),
@@ -339,22 +344,9 @@ fn image(
 /// Grid step of the vision tests' map: the bearing housing's 0.1 mm.
 const FINE: f64 = 1e-4;
 
-/// A filter over the analytic map at the bearing housing's grid step.
-fn fine_filter(seed: u64) -> Filter {
-    let map = peg_map(5e-3, FINE, None).expect("map");
-    Filter::new(
-        &map,
-        Path::new("synthetic"),
-        Config {
-            seed,
-            ..Config::default()
-        },
-    )
-    .expect("filter")
-}
 
 fn vision_filter(seed: u64, method: ftmap::vision::VisionMethod) -> Filter {
-    let f = fine_filter(seed);
+    let f = filter_at(seed, FINE);
     let sense = VisionSense::new(crate::synthetic::bearing_vision(), method, 0.5, f.lookup());
     f.with_vision(sense)
 }
@@ -370,7 +362,7 @@ fn vision_pins_down_y_after_one_measurement() {
     ] {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
         let m = measurement(truth[0], truth[1], [0.0, 0.0], 1e-3, &mut rng);
-        let mut force = fine_filter(seed);
+        let mut force = filter_at(seed, FINE);
         force.measure(&m).expect("finite");
         for method in [VisionMethod::Relative, VisionMethod::Recalibration] {
             let mut fused = vision_filter(seed, method);
@@ -422,7 +414,7 @@ fn an_image_alone_judges_y_and_leaves_x_spread() {
     assert!(e.std[0] > 5.0 * e.std[1], "{e:?}");
     assert_eq!(f.measurements(), 1);
     // Without a vision model an image alone changes nothing and says so.
-    let mut plain = fine_filter(31);
+    let mut plain = filter_at(31, FINE);
     let before = plain.estimate().clone();
     let r = plain
         .measure(&Measurement {
