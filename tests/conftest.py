@@ -1,7 +1,9 @@
 """Shared fixtures of the cross-language tests: the packaged FtFusion.fmu (built with
 `cargo xtask fmu` when missing) and an independent reader of its FT-Map."""
 
+import importlib
 import json
+import os
 import shutil
 import struct
 import subprocess
@@ -13,6 +15,22 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
+
+
+def missing(what):
+    """A prerequisite is missing: under CI (CI=true) the test fails, so that a green run
+    means it ran; elsewhere it is skipped with the reason."""
+    if os.environ.get("CI") == "true":
+        pytest.fail(f"{what} (under CI=true a missing prerequisite fails the test)")
+    pytest.skip(what)
+
+
+def require_module(name):
+    """The module `name`, or `missing` when it is not installed (scripts/setup.sh installs it)."""
+    try:
+        return importlib.import_module(name)
+    except ImportError as e:
+        missing(f"Python module {name} is not installed ({e}): run scripts/setup.sh")
 FMU = ROOT / "target" / "fmu" / "FtFusion.fmu"
 CHANNELS = ["fx", "fy", "fz", "tx", "ty", "tz", "depth"]
 
@@ -22,13 +40,13 @@ def fmu_path():
     """The packaged FMU, built if missing."""
     if not FMU.is_file():
         if shutil.which("cargo") is None:
-            pytest.skip("target/fmu/FtFusion.fmu is missing and cargo is not installed to build it")
+            missing("target/fmu/FtFusion.fmu is missing and cargo is not installed to build it")
         subprocess.run(["cargo", "xtask", "fmu"], cwd=ROOT, check=True)
     return str(FMU)
 
 
 class FtMap:
-    """An FT-Map file read with the format's description (maps/src/format.rs), not its code."""
+    """An FT-Map file read with the format's description (docs/map-format.md), not its code."""
 
     def __init__(self, data: bytes):
         assert data[:8] == b"FTMAP\0\r\n", "magic"

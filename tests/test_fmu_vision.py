@@ -1,6 +1,6 @@
 """FtFusion.fmu's vision inputs through FMPy, against an independent NumPy model of the
-camera: a vision model file written here from the documented format (README, "Vision
-model file"), the features of a true pose computed here by pinhole projection and circle
+camera: a vision model file written here from the documented format (docs/vision.md,
+"Vision model file"), the features of a true pose computed here by pinhole projection and circle
 tangents, handed to the FMU with and without a contact."""
 
 import json

@@ -7,7 +7,7 @@ import importlib.util
 import subprocess
 from pathlib import Path
 
-import pytest
+from conftest import missing
 
 ROOT = Path(__file__).resolve().parent.parent
 HARNESS = ROOT / "target" / "release" / "harness"
@@ -22,7 +22,7 @@ def load_example():
 
 def test_fmpy_script_contact_counts_agree_with_the_rust_harness(fmu_path, tmp_path):
     if not HARNESS.is_file():
-        pytest.skip("target/release/harness is missing: cargo build --release -p harness")
+        missing("target/release/harness is missing: cargo build --release -p harness")
     seed = 5
     subprocess.run(
         [str(HARNESS), "trials", "--task", "peg_in_hole", "--trials", "4", "--seed", str(seed),

@@ -5,6 +5,7 @@ deterministic for a seed)."""
 import pytest
 from fmpy import read_model_description
 
+from conftest import require_module
 from test_fmu import TRUTH, WRENCH, slave
 
 STEP = 0.1
@@ -39,7 +40,7 @@ def fmpy_outputs(fmu_path, ftmap, tmp_path_factory):
 
 
 def test_libcosim_gives_the_same_outputs_as_fmpy(fmu_path, ftmap, fmpy_outputs):
-    pytest.importorskip("libcosimpy")
+    require_module("libcosimpy")
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimManipulator import CosimManipulator
     from libcosimpy.CosimObserver import CosimObserver
@@ -64,7 +65,7 @@ def test_libcosim_gives_the_same_outputs_as_fmpy(fmu_path, ftmap, fmpy_outputs):
 
 
 def test_ecos_gives_the_same_outputs_as_fmpy(fmu_path, ftmap, fmpy_outputs):
-    ecospy = pytest.importorskip("ecospy")
+    ecospy = require_module("ecospy")
     structure = ecospy.EcosSimulationStructure()
     structure.add_model("ftfusion", fmu_path)
     with ecospy.EcosSimulation(structure=structure, step_size=STEP) as sim:

@@ -1,4 +1,5 @@
-"""The README's FMU variable table states exactly what the packaged modelDescription.xml says."""
+"""The FMU reference's variable table (docs/fmu.md, "Variables") states exactly what the packaged
+modelDescription.xml says."""
 import re
 import xml.etree.ElementTree as ET
 import zipfile
@@ -13,6 +14,6 @@ def test_readme_variable_table_matches_the_model_description(fmu_path):
     for sv in root.iter("ScalarVariable"):
         t = list(sv)[0]
         described[sv.get("name")] = (sv.get("valueReference"), sv.get("causality"), t.tag, t.get("unit", ""))
-    rows = re.findall(r"^\| `([^`]+)` \| (\d+) \| (\w+) \| (\w+) \| [^|]* \| ([^|]*) \|", (ROOT / "README.md").read_text(), re.M)
+    rows = re.findall(r"^\| `([^`]+)` \| (\d+) \| (\w+) \| (\w+) \| [^|]* \| ([^|]*) \|", (ROOT / "docs" / "fmu.md").read_text(), re.M)
     documented = {name: (vr, causality, ty, unit.strip()) for name, vr, causality, ty, unit in rows}
     assert documented == described

@@ -351,7 +351,7 @@ impl Instance {
         let path = self
             .resource_path(&params.map)
             .map_err(|(path, reason)| FusionError::Map { path, reason })?;
-        let map = ftmap::format::load(&path).map_err(|e| FusionError::Map {
+        let map = ftmap::map::format::load(&path).map_err(|e| FusionError::Map {
             path: path.clone(),
             reason: match e {
                 MapError::Io { source, .. } => source.to_string(),

@@ -12,7 +12,6 @@ pub mod filter;
 pub mod fmi2;
 pub mod instance;
 pub mod params;
-pub mod synthetic;
 
 pub use error::{FusionError, Result};
 pub use filter::{Config, Estimate, Filter, Interpolation, Measurement, Report};

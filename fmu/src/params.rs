@@ -4,8 +4,8 @@
 use model_description::{Start, VARIABLES, VarType, Variable};
 
 use crate::error::{FusionError, Result};
+use crate::filter::VisionMethod;
 use crate::filter::{Config, Interpolation};
-use ftmap::vision::VisionMethod;
 
 /// The value of one variable.
 #[derive(Debug, Clone, PartialEq)]

@@ -2,6 +2,9 @@
 //! importer: instantiate, set parameters, step with contact inputs read from the FMU's own
 //! map, read outputs, and get / set / serialize states; two instances at once.
 
+#[path = "../../tests/prerequisite.rs"]
+mod prerequisite;
+
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -15,9 +18,9 @@ fn fmu() -> Option<PathBuf> {
     if p.is_file() {
         Some(p)
     } else {
-        eprintln!(
-            "SKIPPED: {} is missing: run `cargo xtask fmu` first",
-            p.display()
+        prerequisite::missing(
+            &format!("{} is missing", p.display()),
+            "run `cargo xtask fmu` first",
         );
         None
     }
@@ -35,7 +38,7 @@ fn resource_map(fmu: &Path) -> ftmap::FtMap {
         .expect("map entry")
         .read_to_end(&mut bytes)
         .expect("read");
-    ftmap::format::from_bytes(&bytes, Path::new("peg_in_hole.ftmap")).expect("valid map")
+    ftmap::map::format::from_bytes(&bytes, Path::new("peg_in_hole.ftmap")).expect("valid map")
 }
 
 fn start(import: &Fmi2Import, name: &str, seed: i32) -> InstanceCS {

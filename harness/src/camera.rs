@@ -44,13 +44,23 @@ pub struct RgbImage {
 impl RgbImage {
     /// Grey values (ITU-R BT.601 luma), one f32 per pixel, 0..255.
     pub fn to_gray(&self) -> Vec<f32> {
-        self.data.chunks_exact(3).map(|p| 0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2])).collect()
+        self.data
+            .chunks_exact(3)
+            .map(|p| 0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2]))
+            .collect()
     }
 
     /// An image showing grey values (clamped to 0..255).
     pub fn from_gray(width: usize, height: usize, gray: &[f32]) -> Self {
-        let data = gray.iter().flat_map(|&g| [g.clamp(0.0, 255.0).round() as u8; 3]).collect();
-        Self { width, height, data }
+        let data = gray
+            .iter()
+            .flat_map(|&g| [g.clamp(0.0, 255.0).round() as u8; 3])
+            .collect();
+        Self {
+            width,
+            height,
+            data,
+        }
     }
 
     /// Sets a pixel (ignored outside the image).
@@ -63,10 +73,18 @@ impl RgbImage {
 
     /// Draws a line between two pixel positions (one pixel wide).
     pub fn line(&mut self, a: [f64; 2], b: [f64; 2], rgb: [u8; 3]) {
-        let n = (b[0] - a[0]).abs().max((b[1] - a[1]).abs()).ceil().clamp(1.0, 1.0e5) as usize;
+        let n = (b[0] - a[0])
+            .abs()
+            .max((b[1] - a[1]).abs())
+            .ceil()
+            .clamp(1.0, 1.0e5) as usize;
         for k in 0..=n {
             let t = k as f64 / n as f64;
-            self.put((a[0] + t * (b[0] - a[0])).round() as i64, (a[1] + t * (b[1] - a[1])).round() as i64, rgb);
+            self.put(
+                (a[0] + t * (b[0] - a[0])).round() as i64,
+                (a[1] + t * (b[1] - a[1])).round() as i64,
+                rgb,
+            );
         }
     }
 
@@ -88,10 +106,17 @@ impl RgbImage {
             std::fs::create_dir_all(dir).map_err(|e| HarnessError::io(dir, e))?;
         }
         let file = std::fs::File::create(path).map_err(|e| HarnessError::io(path, e))?;
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), self.width as u32, self.height as u32);
+        let mut enc = png::Encoder::new(
+            std::io::BufWriter::new(file),
+            self.width as u32,
+            self.height as u32,
+        );
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        let fail = |e: png::EncodingError| HarnessError::Plot { path: path.to_owned(), reason: e.to_string() };
+        let fail = |e: png::EncodingError| HarnessError::Plot {
+            path: path.to_owned(),
+            reason: e.to_string(),
+        };
         let mut w = enc.write_header().map_err(fail)?;
         w.write_image_data(&self.data).map_err(fail)?;
         w.finish().map_err(fail)
@@ -120,7 +145,10 @@ impl CameraScene {
     /// When MuJoCo refuses the scene or the camera, the joints or part B are missing.
     pub fn load(scene: &Path, spec: SceneSpec) -> Result<Self> {
         crate::runtime::check_mujoco()?;
-        let model = MjModel::from_xml(scene).map_err(|e| HarnessError::Scene { path: scene.to_owned(), reason: e.to_string() })?;
+        let model = MjModel::from_xml(scene).map_err(|e| HarnessError::Scene {
+            path: scene.to_owned(),
+            reason: e.to_string(),
+        })?;
         Self::with_model(model, spec)
     }
 
@@ -130,22 +158,48 @@ impl CameraScene {
     /// As [`CameraScene::load`].
     pub fn from_xml_string(xml: &str, spec: SceneSpec) -> Result<Self> {
         crate::runtime::check_mujoco()?;
-        let model = MjModel::from_xml_string(xml)
-            .map_err(|e| HarnessError::Scene { path: "<string>".into(), reason: e.to_string() })?;
+        let model = MjModel::from_xml_string(xml).map_err(|e| HarnessError::Scene {
+            path: "<string>".into(),
+            reason: e.to_string(),
+        })?;
         Self::with_model(model, spec)
     }
 
     fn with_model(model: MjModel, spec: SceneSpec) -> Result<Self> {
-        let name = spec.camera.as_ref().map(|c| c.name.clone()).ok_or(missing("camera", "vision"))?;
-        let cam = model.name_to_id(MjtObjBase::mjOBJ_CAMERA, &name).ok_or(missing("camera", "vision"))?;
-        let joint = |n: &'static str| model.name_to_id(MjtObjBase::mjOBJ_JOINT, n).ok_or(missing("joint", n));
+        let name = spec
+            .camera
+            .as_ref()
+            .map(|c| c.name.clone())
+            .ok_or(missing("camera", "vision"))?;
+        let cam = model
+            .name_to_id(MjtObjBase::mjOBJ_CAMERA, &name)
+            .ok_or(missing("camera", "vision"))?;
+        let joint = |n: &'static str| {
+            model
+                .name_to_id(MjtObjBase::mjOBJ_JOINT, n)
+                .ok_or(missing("joint", n))
+        };
         let adr = model.jnt_qposadr();
-        let qpos = [adr[joint("x")?] as usize, adr[joint("y")?] as usize, adr[joint("z")?] as usize];
-        let body_b = model.name_to_id(MjtObjBase::mjOBJ_BODY, "part_b").ok_or(missing("body", "part_b"))?;
-        let mocap = usize::try_from(model.body_mocapid()[body_b]).map_err(|_| missing("mocap body", "part_b"))?;
+        let qpos = [
+            adr[joint("x")?] as usize,
+            adr[joint("y")?] as usize,
+            adr[joint("z")?] as usize,
+        ];
+        let body_b = model
+            .name_to_id(MjtObjBase::mjOBJ_BODY, "part_b")
+            .ok_or(missing("body", "part_b"))?;
+        let mocap = usize::try_from(model.body_mocapid()[body_b])
+            .map_err(|_| missing("mocap body", "part_b"))?;
         let mut data = MjData::new(Box::new(model));
         data.forward();
-        Ok(Self { data, renderer: None, spec, cam, qpos, mocap })
+        Ok(Self {
+            data,
+            renderer: None,
+            spec,
+            cam,
+            qpos,
+            mocap,
+        })
     }
 
     /// The scene description.
@@ -180,16 +234,31 @@ impl CameraScene {
     /// # Errors
     /// When no OpenGL context can be made (no EGL device) or rendering fails.
     pub fn render(&mut self) -> Result<RgbImage> {
-        let fail = |e: mujoco_rs::renderer::RendererError| HarnessError::Scene { path: "<render>".into(), reason: format!("offscreen rendering: {e:?}") };
+        let fail = |e: mujoco_rs::renderer::RendererError| HarnessError::Scene {
+            path: "<render>".into(),
+            reason: format!("offscreen rendering: {e:?}"),
+        };
         if self.renderer.is_none() {
-            let r = MjRenderer::builder().camera(MjvCamera::new_fixed(self.cam)).build(self.data.model()).map_err(fail)?;
+            let r = MjRenderer::builder()
+                .camera(MjvCamera::new_fixed(self.cam))
+                .build(self.data.model())
+                .map_err(fail)?;
             self.renderer = Some(r);
         }
-        let Some(r) = self.renderer.as_mut() else { return Err(HarnessError::Scene { path: "<render>".into(), reason: "no renderer".into() }) };
+        let Some(r) = self.renderer.as_mut() else {
+            return Err(HarnessError::Scene {
+                path: "<render>".into(),
+                reason: "no renderer".into(),
+            });
+        };
         r.sync_data(&mut self.data).map_err(fail)?;
         r.render().map_err(fail)?;
         let data = r.rgb_flat().map(<[u8]>::to_vec).unwrap_or_default();
         let cam = from_data(&self.data, self.cam);
-        Ok(RgbImage { width: cam.width, height: cam.height, data })
+        Ok(RgbImage {
+            width: cam.width,
+            height: cam.height,
+            data,
+        })
     }
 }

@@ -18,25 +18,49 @@ use crate::trial::{Strategy, TrialConfig, TrialResult, run_trial};
 /// True offsets uniform in the square ±`size` (m), from `seed`.
 pub fn random_offsets(n: usize, size: f64, seed: u64) -> Vec<[f64; 2]> {
     let mut rng = StdRng::seed_from_u64(seed);
-    (0..n).map(|_| [rng.random_range(-size..=size), rng.random_range(-size..=size)]).collect()
+    (0..n)
+        .map(|_| {
+            [
+                rng.random_range(-size..=size),
+                rng.random_range(-size..=size),
+            ]
+        })
+        .collect()
 }
 
 /// True offsets on a `k` x `k` grid over the square ±`size` (m).
 pub fn grid_offsets(k: usize, size: f64) -> Vec<[f64; 2]> {
-    let at = |i: usize| if k < 2 { 0.0 } else { -size + 2.0 * size * i as f64 / (k - 1) as f64 };
-    (0..k).flat_map(|j| (0..k).map(move |i| [at(i), at(j)])).collect()
+    let at = |i: usize| {
+        if k < 2 {
+            0.0
+        } else {
+            -size + 2.0 * size * i as f64 / (k - 1) as f64
+        }
+    };
+    (0..k)
+        .flat_map(|j| (0..k).map(move |i| [at(i), at(j)]))
+        .collect()
 }
 
 /// Runs one trial per offset; trial i uses seed `seed + i`; `eye` adds the camera.
 ///
 /// # Errors
 /// When the FMU or rendering fails.
-pub fn run_campaign(sim: &mut Sim, fmu: Option<&Fmu>, mut eye: Option<&mut Eye>, cfg: &TrialConfig, offsets: &[[f64; 2]], seed: u64) -> Result<Vec<TrialResult>> {
+pub fn run_campaign(
+    sim: &mut Sim,
+    fmu: Option<&Fmu>,
+    mut eye: Option<&mut Eye>,
+    cfg: &TrialConfig,
+    offsets: &[[f64; 2]],
+    seed: u64,
+) -> Result<Vec<TrialResult>> {
     let bar = ProgressBar::new(offsets.len() as u64);
     bar.set_style(
-        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} trials {msg} ({elapsed}, eta {eta})")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
+        ProgressStyle::with_template(
+            "{prefix} [{bar:30}] {pos}/{len} trials {msg} ({elapsed}, eta {eta})",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
     );
     bar.set_prefix(format!("{:?}", cfg.strategy).to_lowercase());
     let mut results = Vec::with_capacity(offsets.len());
@@ -122,7 +146,14 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
 }
 
 /// Summarises trial results.
-pub fn summarize(task: &str, strategy: Strategy, sensor_noise: bool, vision: bool, results: &[TrialResult], wall: f64) -> Summary {
+pub fn summarize(
+    task: &str,
+    strategy: Strategy,
+    sensor_noise: bool,
+    vision: bool,
+    results: &[TrialResult],
+    wall: f64,
+) -> Summary {
     let n = results.len().max(1) as f64;
     let first: Vec<f64> = results.iter().filter_map(first_contact_y_std).collect();
     let sim: f64 = results.iter().map(|r| r.sim_time).sum();
@@ -154,25 +185,68 @@ impl Summary {
         let rows = [
             ("task", self.task.clone()),
             ("strategy", format!("{:?}", self.strategy).to_lowercase()),
-            ("sensor noise", if self.sensor_noise { "on" } else { "off" }.to_owned()),
-            ("camera", if self.vision { format!("on ({} images missed an edge)", self.images_missed) } else { "off".to_owned() }),
+            (
+                "sensor noise",
+                if self.sensor_noise { "on" } else { "off" }.to_owned(),
+            ),
+            (
+                "camera",
+                if self.vision {
+                    format!("on ({} images missed an edge)", self.images_missed)
+                } else {
+                    "off".to_owned()
+                },
+            ),
             ("trials", self.trials.to_string()),
-            ("success rate", format!("{:.1} %", 100.0 * self.success_rate)),
+            (
+                "success rate",
+                format!("{:.1} %", 100.0 * self.success_rate),
+            ),
             (
                 "contacts mean / median / p95 / max",
-                format!("{:.2} / {} / {} / {}", self.contacts.mean, self.contacts.median, self.contacts.p95, self.contacts.max),
+                format!(
+                    "{:.2} / {} / {} / {}",
+                    self.contacts.mean, self.contacts.median, self.contacts.p95, self.contacts.max
+                ),
             ),
             (
                 "contact measurements mean / median / p95 / max",
-                format!("{:.2} / {} / {} / {}", self.measurements.mean, self.measurements.median, self.measurements.p95, self.measurements.max),
+                format!(
+                    "{:.2} / {} / {} / {}",
+                    self.measurements.mean,
+                    self.measurements.median,
+                    self.measurements.p95,
+                    self.measurements.max
+                ),
             ),
-            ("object.y_std after the first contact", mm(self.y_std_first_contact)),
-            ("final error mean / max", format!("{} / {}", mm(self.final_error_mean), mm(self.final_error_max))),
-            ("trials per second", format!("{:.2}", self.trials_per_second)),
-            ("real-time factor (MuJoCo / whole loop)", format!("{:.1} x / {:.1} x", self.realtime_factor, self.realtime_factor_overall)),
+            (
+                "object.y_std after the first contact",
+                mm(self.y_std_first_contact),
+            ),
+            (
+                "final error mean / max",
+                format!(
+                    "{} / {}",
+                    mm(self.final_error_mean),
+                    mm(self.final_error_max)
+                ),
+            ),
+            (
+                "trials per second",
+                format!("{:.2}", self.trials_per_second),
+            ),
+            (
+                "real-time factor (MuJoCo / whole loop)",
+                format!(
+                    "{:.1} x / {:.1} x",
+                    self.realtime_factor, self.realtime_factor_overall
+                ),
+            ),
         ];
         let w = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
-        rows.iter().map(|(k, v)| format!("  {k:<w$}  {v}\n")).collect()
+        rows.iter()
+            .map(|(k, v)| format!("  {k:<w$}  {v}\n"))
+            .collect()
     }
 }
 
@@ -183,8 +257,20 @@ impl Summary {
 pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
     let io = |e: csv::Error| HarnessError::io(path, std::io::Error::other(e));
     let mut w = csv::Writer::from_path(path).map_err(io)?;
-    w.write_record(["trial", "offset_x_m", "offset_y_m", "contacts", "measurements", "success", "final_error_m", "y_std_first_contact_m", "images_missed", "wall_s", "sim_time_s"])
-        .map_err(io)?;
+    w.write_record([
+        "trial",
+        "offset_x_m",
+        "offset_y_m",
+        "contacts",
+        "measurements",
+        "success",
+        "final_error_m",
+        "y_std_first_contact_m",
+        "images_missed",
+        "wall_s",
+        "sim_time_s",
+    ])
+    .map_err(io)?;
     for (i, r) in results.iter().enumerate() {
         w.write_record([
             i.to_string(),
@@ -226,29 +312,59 @@ pub struct TrialRow {
 /// # Errors
 /// When the file cannot be read or a row lacks a column or holds a malformed value.
 pub fn read_trials_csv(path: &Path) -> Result<Vec<TrialRow>> {
-    let bad = |e: csv::Error| HarnessError::Invalid { what: "trials.csv", reason: format!("{}: {e}", path.display()) };
+    let bad = |e: csv::Error| HarnessError::Invalid {
+        what: "trials.csv",
+        reason: format!("{}: {e}", path.display()),
+    };
     let mut r = csv::Reader::from_path(path).map_err(bad)?;
-    r.deserialize().collect::<std::result::Result<Vec<TrialRow>, _>>().map_err(bad)
+    r.deserialize()
+        .collect::<std::result::Result<Vec<TrialRow>, _>>()
+        .map_err(bad)
 }
 
 /// Two campaigns side by side (contacts, contact measurements, y spread), and, when they ran
 /// the same true offsets, in how many trials the first needed fewer, as many or more contacts.
 pub fn comparison_table(names: [&str; 2], runs: [&[TrialRow]; 2]) -> String {
-    let stats = |r: &[TrialRow], f: fn(&TrialRow) -> f64| ContactStats::of(r.iter().map(f).collect());
-    let row = |label: &str, f: &dyn Fn(&[TrialRow]) -> String| format!("  {label:<44} {:>22} {:>22}\n", f(runs[0]), f(runs[1]));
+    let stats =
+        |r: &[TrialRow], f: fn(&TrialRow) -> f64| ContactStats::of(r.iter().map(f).collect());
+    let row = |label: &str, f: &dyn Fn(&[TrialRow]) -> String| {
+        format!("  {label:<44} {:>22} {:>22}\n", f(runs[0]), f(runs[1]))
+    };
     let quartet = |c: ContactStats| format!("{:.2} / {} / {} / {}", c.mean, c.median, c.p95, c.max);
     let mut out = format!("  {:<44} {:>22} {:>22}\n", "", names[0], names[1]);
     out += &row("trials", &|r| r.len().to_string());
-    out += &row("success rate", &|r| format!("{:.1} %", 100.0 * r.iter().filter(|t| t.success).count() as f64 / r.len().max(1) as f64));
-    out += &row("contacts mean / median / p95 / max", &|r| quartet(stats(r, |t| t.contacts as f64)));
-    out += &row("contact measurements mean / median / p95 / max", &|r| quartet(stats(r, |t| t.measurements as f64)));
+    out += &row("success rate", &|r| {
+        format!(
+            "{:.1} %",
+            100.0 * r.iter().filter(|t| t.success).count() as f64 / r.len().max(1) as f64
+        )
+    });
+    out += &row("contacts mean / median / p95 / max", &|r| {
+        quartet(stats(r, |t| t.contacts as f64))
+    });
+    out += &row("contact measurements mean / median / p95 / max", &|r| {
+        quartet(stats(r, |t| t.measurements as f64))
+    });
     out += &row("object.y_std after the first contact (mean)", &|r| {
         let v: Vec<f64> = r.iter().filter_map(|t| t.y_std_first_contact_m).collect();
-        if v.is_empty() { "-".into() } else { format!("{:.4} mm", 1e3 * v.iter().sum::<f64>() / v.len() as f64) }
+        if v.is_empty() {
+            "-".into()
+        } else {
+            format!("{:.4} mm", 1e3 * v.iter().sum::<f64>() / v.len() as f64)
+        }
     });
-    let paired = runs[0].len() == runs[1].len() && runs[0].iter().zip(runs[1]).all(|(a, b)| (a.offset_x_m - b.offset_x_m).abs() < 1e-9 && (a.offset_y_m - b.offset_y_m).abs() < 1e-9);
+    let paired = runs[0].len() == runs[1].len()
+        && runs[0].iter().zip(runs[1]).all(|(a, b)| {
+            (a.offset_x_m - b.offset_x_m).abs() < 1e-9 && (a.offset_y_m - b.offset_y_m).abs() < 1e-9
+        });
     if paired {
-        let count = |f: fn(usize, usize) -> bool| runs[0].iter().zip(runs[1]).filter(|(a, b)| f(a.contacts, b.contacts)).count();
+        let count = |f: fn(usize, usize) -> bool| {
+            runs[0]
+                .iter()
+                .zip(runs[1])
+                .filter(|(a, b)| f(a.contacts, b.contacts))
+                .count()
+        };
         out += &format!(
             "  same true offsets: {} needed fewer contacts in {}, as many in {}, more in {} trials\n",
             names[0],
@@ -272,7 +388,8 @@ fn first_contact_y_std(r: &TrialResult) -> Option<f64> {
 /// # Errors
 /// When the file cannot be written.
 pub fn write_summary(path: &Path, s: &Summary) -> Result<()> {
-    let text = serde_json::to_string_pretty(s).map_err(|e| HarnessError::io(path, std::io::Error::other(e)))?;
+    let text = serde_json::to_string_pretty(s)
+        .map_err(|e| HarnessError::io(path, std::io::Error::other(e)))?;
     std::fs::write(path, text + "\n").map_err(|e| HarnessError::io(path, e))
 }
 

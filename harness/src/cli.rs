@@ -9,12 +9,12 @@ use ftmap::Task;
 
 use crate::campaign::{self, Summary};
 use crate::eye::Eye;
-use crate::vision::Detector;
 use crate::fmu_driver::{Fmu, Settings, default_fmu_path};
 use crate::scene::{self, SceneSpec};
 use crate::sensor::Noise;
 use crate::sim::Sim;
 use crate::trial::{Strategy, TrialConfig, TrialResult};
+use crate::vision::Detector;
 use crate::{compare, plot, scan};
 
 /// MuJoCo validation harness of ftfusion: scenes, closed-loop trials through FtFusion.fmu,
@@ -216,12 +216,28 @@ pub fn open_task(name: &str) -> anyhow::Result<(Task, Sim)> {
 
 /// Radial clearance of a task's parts (m): the spiral's pitch stays below twice it.
 fn clearance(task: &Task) -> anyhow::Result<f64> {
-    use ftmap::cad::Geometry;
-    Ok(match ftmap::cad::geometry_of(&task.path)? {
-        Geometry::RoundPeg { peg_radius, hole_radius, .. } => hole_radius - peg_radius,
-        Geometry::OctagonPeg { peg_across_flats, hole_across_flats, .. } => (hole_across_flats - peg_across_flats) / 2.0,
-        Geometry::GearOnShaft { bore_radius, shaft_radius, .. } => bore_radius - shaft_radius,
-        Geometry::BearingHousing { bore_radius, seat_radius, .. } => bore_radius - seat_radius,
+    use ftmap::task::cad::Geometry;
+    Ok(match *task.geometry()? {
+        Geometry::RoundPeg {
+            peg_radius,
+            hole_radius,
+            ..
+        } => hole_radius - peg_radius,
+        Geometry::OctagonPeg {
+            peg_across_flats,
+            hole_across_flats,
+            ..
+        } => (hole_across_flats - peg_across_flats) / 2.0,
+        Geometry::GearOnShaft {
+            bore_radius,
+            shaft_radius,
+            ..
+        } => bore_radius - shaft_radius,
+        Geometry::BearingHousing {
+            bore_radius,
+            seat_radius,
+            ..
+        } => bore_radius - seat_radius,
     })
 }
 
@@ -232,8 +248,16 @@ fn config(run: &RunArgs, task: &Task) -> anyhow::Result<TrialConfig> {
         None => {
             let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
             let t0 = std::time::Instant::now();
-            let (path, computed) = ftmap::generate::cached(task, &dir).with_context(|| format!("the FT-Map of task {}", task.name))?;
-            let how = if computed { format!("computed from the CAD meshes in {:.1} s", t0.elapsed().as_secs_f64()) } else { "cached".into() };
+            let (path, computed) = ftmap::generate::cached(task, &dir)
+                .with_context(|| format!("the FT-Map of task {}", task.name))?;
+            let how = if computed {
+                format!(
+                    "computed from the CAD meshes in {:.1} s",
+                    t0.elapsed().as_secs_f64()
+                )
+            } else {
+                "cached".into()
+            };
             println!("map {} ({how})", path.display());
             Some(path)
         }
@@ -241,7 +265,12 @@ fn config(run: &RunArgs, task: &Task) -> anyhow::Result<TrialConfig> {
     if let Some(m) = &map
         && !m.is_file()
     {
-        bail!("map {} not found: `ftmap generate --task {} --out {}`", m.display(), task.name, m.display());
+        bail!(
+            "map {} not found: `ftmap generate --task {} --out {}`",
+            m.display(),
+            task.name,
+            m.display()
+        );
     }
     let size = task.omega.size_trans;
     let spiral_step = 1.6 * clearance(task)?;
@@ -255,7 +284,11 @@ fn config(run: &RunArgs, task: &Task) -> anyhow::Result<TrialConfig> {
         strategy: run.strategy,
         max_contacts,
         max_sim_time: run.max_sim_time.unwrap_or(0.3 * max_contacts as f64),
-        noise: if run.sensor_noise == Switch::On { Noise::TYPICAL } else { Noise::NONE },
+        noise: if run.sensor_noise == Switch::On {
+            Noise::TYPICAL
+        } else {
+            Noise::NONE
+        },
         spiral_step,
         spiral_radius,
         settings: Settings {
@@ -294,17 +327,33 @@ fn open_eye(run: &RunArgs, task: &Task, cfg: &mut TrialConfig) -> anyhow::Result
     }
     let eye = Eye::open(task, run.image_noise, run.detector)?;
     std::fs::create_dir_all(&run.out).with_context(|| format!("creating {}", run.out.display()))?;
-    let path = std::path::absolute(run.out.join("vision.json")).context("the vision model's path")?;
+    let path =
+        std::path::absolute(run.out.join("vision.json")).context("the vision model's path")?;
     eye.model().save(&path)?;
-    println!("vision model {} (camera as MuJoCo places it)", path.display());
+    println!(
+        "vision model {} (camera as MuJoCo places it)",
+        path.display()
+    );
     cfg.settings.vision = Some(path);
     Ok(Some(eye))
 }
 
-fn finish(run: &RunArgs, task: &Task, results: &[TrialResult], wall: f64) -> anyhow::Result<Summary> {
+fn finish(
+    run: &RunArgs,
+    task: &Task,
+    results: &[TrialResult],
+    wall: f64,
+) -> anyhow::Result<Summary> {
     std::fs::create_dir_all(&run.out).with_context(|| format!("creating {}", run.out.display()))?;
     campaign::write_trials_csv(&run.out.join("trials.csv"), results)?;
-    let summary = campaign::summarize(&task.name, run.strategy, run.sensor_noise == Switch::On, run.vision, results, wall);
+    let summary = campaign::summarize(
+        &task.name,
+        run.strategy,
+        run.sensor_noise == Switch::On,
+        run.vision,
+        results,
+        wall,
+    );
     campaign::write_summary(&run.out.join("summary.json"), &summary)?;
     println!("{}", summary.table());
     Ok(summary)
@@ -315,64 +364,136 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     crate::runtime::check_mujoco()?;
     match cli.command {
         Command::Scene { task, check } => scene_cmd(task.as_deref(), check),
-        Command::Render { task, out, object_mm, tcp_mm, noise, seed, detector, bench } => {
-            let view = RenderView { object: parse_mm(&object_mm)?, tcp: parse_mm(&tcp_mm)?, noise, seed };
+        Command::Render {
+            task,
+            out,
+            object_mm,
+            tcp_mm,
+            noise,
+            seed,
+            detector,
+            bench,
+        } => {
+            let view = RenderView {
+                object: parse_mm(&object_mm)?,
+                tcp: parse_mm(&tcp_mm)?,
+                noise,
+                seed,
+            };
             render_cmd(&task, &out, &view, detector, bench)
         }
-        Command::Trials { run, trials, range_mm } => {
+        Command::Trials {
+            run,
+            trials,
+            range_mm,
+        } => {
             let (task, mut sim) = open_task(&run.task)?;
             let mut cfg = config(&run, &task)?;
             let mut eye = open_eye(&run, &task, &mut cfg)?;
             let fmu = load_fmu(&run)?;
             let size = range_mm.map_or(task.omega.size_trans, |r| r * 1e-3);
             let offsets = campaign::random_offsets(trials, size, run.seed);
-            let (results, wall) = campaign::timed(|| campaign::run_campaign(&mut sim, fmu.as_ref(), eye.as_mut(), &cfg, &offsets, run.seed));
+            let (results, wall) = campaign::timed(|| {
+                campaign::run_campaign(
+                    &mut sim,
+                    fmu.as_ref(),
+                    eye.as_mut(),
+                    &cfg,
+                    &offsets,
+                    run.seed,
+                )
+            });
             let results = results?;
             finish(&run, &task, &results, wall)?;
             if run.strategy == Strategy::Pf {
                 // The first trial that needed a second contact measurement (else the first).
-                let pick = results.iter().position(|r| r.measurements() >= 2).unwrap_or(0);
+                let pick = results
+                    .iter()
+                    .position(|r| r.measurements() >= 2)
+                    .unwrap_or(0);
                 if let Some(r) = results.get(pick) {
                     let path = run.out.join("estimates.png");
                     plot::estimates(&path, r, task.omega.size_trans)?;
-                    println!("plot {} (trial {pick}: estimate and 1/2-sigma ellipse after its first three measurements; the FMU exposes no particles)", path.display());
+                    println!(
+                        "plot {} (trial {pick}: estimate and 1/2-sigma ellipse after its first three measurements; the FMU exposes no particles)",
+                        path.display()
+                    );
                 }
             }
             Ok(())
         }
-        Command::Sweep { run, grid, range_mm } => {
+        Command::Sweep {
+            run,
+            grid,
+            range_mm,
+        } => {
             let (task, mut sim) = open_task(&run.task)?;
             let mut cfg = config(&run, &task)?;
             let mut eye = open_eye(&run, &task, &mut cfg)?;
             let fmu = load_fmu(&run)?;
             let size = range_mm.map_or(task.omega.size_trans, |r| r * 1e-3);
             let offsets = campaign::grid_offsets(grid, size);
-            let (results, wall) = campaign::timed(|| campaign::run_campaign(&mut sim, fmu.as_ref(), eye.as_mut(), &cfg, &offsets, run.seed));
+            let (results, wall) = campaign::timed(|| {
+                campaign::run_campaign(
+                    &mut sim,
+                    fmu.as_ref(),
+                    eye.as_mut(),
+                    &cfg,
+                    &offsets,
+                    run.seed,
+                )
+            });
             let results = results?;
             finish(&run, &task, &results, wall)?;
             let path = run.out.join("sweep.png");
-            let cell = if grid > 1 { 2.0 * size / (grid - 1) as f64 } else { 2.0 * size };
+            let cell = if grid > 1 {
+                2.0 * size / (grid - 1) as f64
+            } else {
+                2.0 * size
+            };
             plot::sweep(&path, &results, size, cell)?;
             println!("plot {}", path.display());
             Ok(())
         }
-        Command::Scan { task, out, step, size } => {
+        Command::Scan {
+            task,
+            out,
+            step,
+            size,
+        } => {
             let (task, mut sim) = open_task(&task)?;
             let size = size.map_or(task.omega.size_trans, |s| s * 1e-3);
             let map = scan::scan(&mut sim, &task, step * 1e-3, size)?;
             if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+                std::fs::create_dir_all(dir)
+                    .with_context(|| format!("creating {}", dir.display()))?;
             }
-            ftmap::format::save(&map, &out)?;
-            println!("measured map {} ({} cells, {:.1} s simulated)", out.display(), map.grid().cells(), sim.simulated());
+            ftmap::map::format::save(&map, &out)?;
+            println!(
+                "measured map {} ({} cells, {:.1} s simulated)",
+                out.display(),
+                map.grid().cells(),
+                sim.simulated()
+            );
             Ok(())
         }
         Command::CompareMaps { a, b, plot: png } => compare_cmd(&a, &b, &png),
         Command::CompareRuns { a, b, plot: png } => {
-            let (ra, rb) = (campaign::read_trials_csv(&a.join("trials.csv"))?, campaign::read_trials_csv(&b.join("trials.csv"))?);
-            let name = |p: &Path| p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned());
+            let (ra, rb) = (
+                campaign::read_trials_csv(&a.join("trials.csv"))?,
+                campaign::read_trials_csv(&b.join("trials.csv"))?,
+            );
+            let name = |p: &Path| {
+                p.file_name().map_or_else(
+                    || p.display().to_string(),
+                    |n| n.to_string_lossy().into_owned(),
+                )
+            };
             let names = [name(&a), name(&b)];
-            print!("{}", campaign::comparison_table([&names[0], &names[1]], [&ra, &rb]));
+            print!(
+                "{}",
+                campaign::comparison_table([&names[0], &names[1]], [&ra, &rb])
+            );
             plot::contacts_per_trial(&png, [&names[0], &names[1]], [&ra, &rb])?;
             println!("plot {}", png.display());
             Ok(())
@@ -394,18 +515,26 @@ fn scene_cmd(task: Option<&str>, check: bool) -> anyhow::Result<()> {
         } else {
             let path = scene::write_scene(t)?;
             let spec = SceneSpec::of_task(t)?;
-            Sim::load(&path, spec).with_context(|| format!("loading the new scene {}", path.display()))?;
+            Sim::load(&path, spec)
+                .with_context(|| format!("loading the new scene {}", path.display()))?;
             println!("wrote {}", path.display());
         }
     }
     if !stale.is_empty() {
-        bail!("scenes not current (run `harness scene`): {}", stale.join(", "));
+        bail!(
+            "scenes not current (run `harness scene`): {}",
+            stale.join(", ")
+        );
     }
     Ok(())
 }
 
 fn parse_mm(s: &str) -> anyhow::Result<[f64; 2]> {
-    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().with_context(|| format!("\"{s}\": want x,y in mm"))?;
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("\"{s}\": want x,y in mm"))?;
     match v.as_slice() {
         [x, y] => Ok([x * 1e-3, y * 1e-3]),
         _ => bail!("\"{s}\": want x,y in mm"),
@@ -420,17 +549,38 @@ struct RenderView {
     seed: u64,
 }
 
-fn render_cmd(task: &str, out: &Path, rv: &RenderView, detector: Detector, bench: Option<usize>) -> anyhow::Result<()> {
-    let RenderView { object, tcp, noise, seed } = *rv;
+fn render_cmd(
+    task: &str,
+    out: &Path,
+    rv: &RenderView,
+    detector: Detector,
+    bench: Option<usize>,
+) -> anyhow::Result<()> {
+    let RenderView {
+        object,
+        tcp,
+        noise,
+        seed,
+    } = *rv;
     use crate::camera::{CameraScene, RgbImage};
     use crate::vision::{self, Features};
     let task = Task::find(task)?;
     let spec = SceneSpec::of_task(&task)?;
-    let no_features = || format!("task {} has no vision features and no camera (only bearing_housing has)", task.name);
-    let designed = spec.camera.as_ref().with_context(no_features)?.camera.clone();
-    vision::task_model(&task, designed).with_context(no_features)?;
+    let no_features = || {
+        format!(
+            "task {} has no vision features and no camera (only bearing_housing has)",
+            task.name
+        )
+    };
+    let designed = spec
+        .camera
+        .as_ref()
+        .with_context(no_features)?
+        .camera
+        .clone();
+    vision::task_model(&task, designed)?;
     let mut view = CameraScene::load(&scene::scene_path(&task), spec)?;
-    let model = vision::task_model(&task, view.camera()).with_context(no_features)?;
+    let model = vision::task_model(&task, view.camera())?;
     let tcp = [tcp[0], tcp[1], view.approach_height()];
     let object3 = [object[0], object[1], 0.0];
     view.place(object, tcp);
@@ -457,7 +607,11 @@ fn render_cmd(task: &str, out: &Path, rv: &RenderView, detector: Detector, bench
             let t = std::time::Instant::now();
             let mut found = 0;
             for g in &copies {
-                found += vision::detect_edges(g, &cam, &model, tcp, object3, task.omega.size_trans, d).iter().filter(|e| e.found.is_ok()).count();
+                found +=
+                    vision::detect_edges(g, &cam, &model, tcp, object3, task.omega.size_trans, d)
+                        .iter()
+                        .filter(|e| e.found.is_ok())
+                        .count();
             }
             let ms = t.elapsed().as_secs_f64() * 1e3 / copies.len() as f64;
             println!(
@@ -469,13 +623,37 @@ fn render_cmd(task: &str, out: &Path, rv: &RenderView, detector: Detector, bench
                 4 * copies.len()
             );
         }
-        println!("rendering: first frame (GL context) {render_ms:.0} ms, next frame {frame_ms:.0} ms");
+        println!(
+            "rendering: first frame (GL context) {render_ms:.0} ms, next frame {frame_ms:.0} ms"
+        );
         return Ok(());
     }
-    let results = vision::detect_edges(&gray, &cam, &model, tcp, object3, task.omega.size_trans, detector);
-    let mut img = if noise > 0.0 { RgbImage::from_gray(cam.width, cam.height, &gray) } else { image };
-    println!("camera: {}x{} px, fovy {} deg, f = {:.1} px, at {:?} m; render {render_ms:.1} ms", cam.width, cam.height, cam.fovy, cam.focal(), cam.pos);
-    println!("{:<14} {:>9} {:>9} {:>9} {:>9} {:>6}  detected", "edge", "angle", "offset", "d_angle", "d_offset", "band");
+    let results = vision::detect_edges(
+        &gray,
+        &cam,
+        &model,
+        tcp,
+        object3,
+        task.omega.size_trans,
+        detector,
+    );
+    let mut img = if noise > 0.0 {
+        RgbImage::from_gray(cam.width, cam.height, &gray)
+    } else {
+        image
+    };
+    println!(
+        "camera: {}x{} px, fovy {} deg, f = {:.1} px, at {:?} m; render {render_ms:.1} ms",
+        cam.width,
+        cam.height,
+        cam.fovy,
+        cam.focal(),
+        cam.pos
+    );
+    println!(
+        "{:<14} {:>9} {:>9} {:>9} {:>9} {:>6}  detected",
+        "edge", "angle", "offset", "d_angle", "d_offset", "band"
+    );
     for r in &results {
         img.line(r.expected.p0, r.expected.p1, [60, 120, 255]);
         match &r.found {
@@ -511,16 +689,30 @@ fn render_cmd(task: &str, out: &Path, rv: &RenderView, detector: Detector, bench
         _ => println!("vision.valid = false (not all four edges found)"),
     }
     img.save_png(out)?;
-    println!("image {} (blue: expected CAD edges, red: detected lines, yellow: endpoints)", out.display());
+    println!(
+        "image {} (blue: expected CAD edges, red: detected lines, yellow: endpoints)",
+        out.display()
+    );
     Ok(())
 }
 
 fn compare_cmd(a: &Path, b: &Path, png: &Path) -> anyhow::Result<()> {
-    let (ma, mb) = (ftmap::format::load(a)?, ftmap::format::load(b)?);
+    let (ma, mb) = (ftmap::map::format::load(a)?, ftmap::map::format::load(b)?);
     let agreement = compare::compare(&ma, &mb)?;
-    println!("A = {} ({:?}), B = {} ({:?})", a.display(), ma.meta().model, b.display(), mb.meta().model);
+    println!(
+        "A = {} ({:?}), B = {} ({:?})",
+        a.display(),
+        ma.meta().model,
+        b.display(),
+        mb.meta().model
+    );
     print!("{}", agreement.table());
-    plot::agreement(png, &["tx [N m]", "ty [N m]"], &agreement.pairs[3..5], ["A", "B"])?;
+    plot::agreement(
+        png,
+        &["tx [N m]", "ty [N m]"],
+        &agreement.pairs[3..5],
+        ["A", "B"],
+    )?;
     println!("plot {}", png.display());
     Ok(())
 }

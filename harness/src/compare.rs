@@ -71,20 +71,44 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
         .iter()
         .enumerate()
         .map(|(k, p)| {
-            let floor = if (3..6).contains(&k) { TORQUE_FLOOR } else { 1e-6 };
-            let signed: Vec<_> = p.iter().filter(|(x, y)| x.abs() > floor && y.abs() > floor).collect();
-            let agree = signed.iter().filter(|(x, y)| x.signum() == y.signum()).count();
+            let floor = if (3..6).contains(&k) {
+                TORQUE_FLOOR
+            } else {
+                1e-6
+            };
+            let signed: Vec<_> = p
+                .iter()
+                .filter(|(x, y)| x.abs() > floor && y.abs() > floor)
+                .collect();
+            let agree = signed
+                .iter()
+                .filter(|(x, y)| x.signum() == y.signum())
+                .count();
             ChannelAgreement {
                 name: CHANNELS[k],
                 cells: p.len(),
-                sign_agreement: if signed.is_empty() { f64::NAN } else { agree as f64 / signed.len() as f64 },
+                sign_agreement: if signed.is_empty() {
+                    f64::NAN
+                } else {
+                    agree as f64 / signed.len() as f64
+                },
                 correlation: correlation(p),
-                rms: (p.iter().map(|(x, y)| (x - y).powi(2)).sum::<f64>() / p.len().max(1) as f64).sqrt(),
+                rms: (p.iter().map(|(x, y)| (x - y).powi(2)).sum::<f64>() / p.len().max(1) as f64)
+                    .sqrt(),
             }
         })
         .collect();
-    let mean = if angles == 0 { f64::NAN } else { angle_sum / angles as f64 };
-    Ok(Agreement { channels, torque_angle_mean: mean, torque_angle_max: angle_max, pairs })
+    let mean = if angles == 0 {
+        f64::NAN
+    } else {
+        angle_sum / angles as f64
+    };
+    Ok(Agreement {
+        channels,
+        torque_angle_mean: mean,
+        torque_angle_max: angle_max,
+        pairs,
+    })
 }
 
 fn correlation(p: &[(f64, f64)]) -> f64 {
@@ -92,20 +116,30 @@ fn correlation(p: &[(f64, f64)]) -> f64 {
     if p.len() < 2 {
         return f64::NAN;
     }
-    let (mx, my) = (p.iter().map(|q| q.0).sum::<f64>() / n, p.iter().map(|q| q.1).sum::<f64>() / n);
+    let (mx, my) = (
+        p.iter().map(|q| q.0).sum::<f64>() / n,
+        p.iter().map(|q| q.1).sum::<f64>() / n,
+    );
     let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
     for (x, y) in p {
         sxy += (x - mx) * (y - my);
         sxx += (x - mx) * (x - mx);
         syy += (y - my) * (y - my);
     }
-    if sxx <= 0.0 || syy <= 0.0 { f64::NAN } else { sxy / (sxx * syy).sqrt() }
+    if sxx <= 0.0 || syy <= 0.0 {
+        f64::NAN
+    } else {
+        sxy / (sxx * syy).sqrt()
+    }
 }
 
 impl Agreement {
     /// A readable table.
     pub fn table(&self) -> String {
-        let mut s = format!("  {:<7} {:>7} {:>14} {:>12} {:>12}\n", "channel", "cells", "sign agreement", "correlation", "RMS diff");
+        let mut s = format!(
+            "  {:<7} {:>7} {:>14} {:>12} {:>12}\n",
+            "channel", "cells", "sign agreement", "correlation", "RMS diff"
+        );
         // NaN: a channel without signs (all zero in a map) or without spread: say so.
         let or_na = |v: f64, text: String| if v.is_nan() { "n/a".to_owned() } else { text };
         for c in &self.channels {
@@ -113,7 +147,10 @@ impl Agreement {
                 "  {:<7} {:>7} {:>14} {:>12} {:>12.4}\n",
                 c.name,
                 c.cells,
-                or_na(c.sign_agreement, format!("{:.1}%", 100.0 * c.sign_agreement)),
+                or_na(
+                    c.sign_agreement,
+                    format!("{:.1}%", 100.0 * c.sign_agreement)
+                ),
                 or_na(c.correlation, format!("{:.3}", c.correlation)),
                 c.rms
             );

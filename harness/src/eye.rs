@@ -28,12 +28,23 @@ impl Eye {
     pub fn open(task: &Task, noise: f64, detector: Detector) -> Result<Self> {
         let spec = SceneSpec::of_task(task)?;
         if spec.camera.is_none() {
-            return Err(HarnessError::Invalid { what: "vision", reason: format!("task {} has no camera (a [camera] table in its task.toml; bearing_housing has one)", task.name) });
+            return Err(HarnessError::Invalid {
+                what: "vision",
+                reason: format!(
+                    "task {} has no camera (a [camera] table in its task.toml; bearing_housing has one)",
+                    task.name
+                ),
+            });
         }
         let scene = CameraScene::load(&scene_path(task), spec)?;
-        let model = vision::task_model(task, scene.camera())
-            .ok_or_else(|| HarnessError::Invalid { what: "vision", reason: format!("task {} has no vision features (only bearing_housing has)", task.name) })?;
-        Ok(Self { scene, model, size_trans: task.omega.size_trans, noise, detector })
+        let model = vision::task_model(task, scene.camera())?;
+        Ok(Self {
+            scene,
+            model,
+            size_trans: task.omega.size_trans,
+            noise,
+            detector,
+        })
     }
 
     /// The vision model (the camera as MuJoCo places it, the parts' features).
@@ -60,7 +71,15 @@ impl Eye {
         if self.noise > 0.0 {
             vision::add_noise(&mut gray, self.noise, seed);
         }
-        let edges = vision::detect_edges(&gray, &cam, &self.model, tcp, [object[0], object[1], 0.0], self.size_trans, self.detector);
+        let edges = vision::detect_edges(
+            &gray,
+            &cam,
+            &self.model,
+            tcp,
+            [object[0], object[1], 0.0],
+            self.size_trans,
+            self.detector,
+        );
         Ok(Features::of(&edges, &cam))
     }
 }

@@ -96,7 +96,10 @@ pub struct Fmu {
 
 fn fmi_err(what: impl Into<String>) -> impl FnOnce(fmi::fmi2::Fmi2Error) -> HarnessError {
     let what = what.into();
-    move |e| HarnessError::Fmu { what, reason: e.to_string() }
+    move |e| HarnessError::Fmu {
+        what,
+        reason: e.to_string(),
+    }
 }
 
 impl Fmu {
@@ -107,15 +110,22 @@ impl Fmu {
     /// [`HarnessError::Fmu`] when it cannot be unpacked or lacks a variable.
     pub fn load(path: &Path) -> Result<Self> {
         if !path.is_file() {
-            return Err(HarnessError::FmuMissing { path: path.to_owned() });
+            return Err(HarnessError::FmuMissing {
+                path: path.to_owned(),
+            });
         }
-        let import = fmi::import::from_path::<Fmi2Import>(path)
-            .map_err(|e| HarnessError::Fmu { what: format!("import {}", path.display()), reason: e.to_string() })?;
+        let import = fmi::import::from_path::<Fmi2Import>(path).map_err(|e| HarnessError::Fmu {
+            what: format!("import {}", path.display()),
+            reason: e.to_string(),
+        })?;
         let md = import.model_description();
         let vr = |name: &str| {
             md.model_variable_by_name(name)
                 .map(|v| v.value_reference)
-                .map_err(|e| HarnessError::Fmu { what: format!("variable `{name}`"), reason: e.to_string() })
+                .map_err(|e| HarnessError::Fmu {
+                    what: format!("variable `{name}`"),
+                    reason: e.to_string(),
+                })
         };
         let each = |prefix: &str, names: [&str; 6]| -> Result<[u32; 6]> {
             let mut out = [0; 6];
@@ -142,10 +152,19 @@ impl Fmu {
             vision: vr("vision")?,
             sigma_vision: vr("sigma_vision")?,
             vision_method: vr("vision_method")?,
-            features: [vr("vision.left_distance")?, vr("vision.right_distance")?, vr("vision.passive_left")?, vr("vision.passive_right")?],
+            features: [
+                vr("vision.left_distance")?,
+                vr("vision.right_distance")?,
+                vr("vision.passive_left")?,
+                vr("vision.passive_right")?,
+            ],
             vision_valid: vr("vision.valid")?,
         };
-        Ok(Self { import, refs, path: path.to_owned() })
+        Ok(Self {
+            import,
+            refs,
+            path: path.to_owned(),
+        })
     }
 
     /// The FMU file.
@@ -161,31 +180,59 @@ impl Fmu {
         let mut inst = self
             .import
             .instantiate_cs("harness", false, false)
-            .map_err(|e| HarnessError::Fmu { what: "fmi2Instantiate".into(), reason: e.to_string() })?;
+            .map_err(|e| HarnessError::Fmu {
+                what: "fmi2Instantiate".into(),
+                reason: e.to_string(),
+            })?;
         let r = &self.refs;
-        for (vr, file, name) in [(r.map, &settings.map, "map"), (r.vision, &settings.vision, "vision")] {
+        for (vr, file, name) in [
+            (r.map, &settings.map, "map"),
+            (r.vision, &settings.vision, "vision"),
+        ] {
             if let Some(file) = file {
                 let text = file.to_string_lossy().into_owned();
-                let c = CString::new(text).map_err(|e| HarnessError::Invalid { what: name, reason: e.to_string() })?;
-                inst.set_string(&[vr], &[c]).map_err(fmi_err(format!("set {name}")))?;
+                let c = CString::new(text).map_err(|e| HarnessError::Invalid {
+                    what: name,
+                    reason: e.to_string(),
+                })?;
+                inst.set_string(&[vr], &[c])
+                    .map_err(fmi_err(format!("set {name}")))?;
             }
         }
-        let ints = [(r.seed, settings.seed, "seed"), (r.particles, settings.particles, "particles"), (r.iterations, settings.iterations, "iterations"), (r.vision_method, settings.vision_method, "vision_method")];
+        let ints = [
+            (r.seed, settings.seed, "seed"),
+            (r.particles, settings.particles, "particles"),
+            (r.iterations, settings.iterations, "iterations"),
+            (r.vision_method, settings.vision_method, "vision_method"),
+        ];
         for (vr, v, name) in ints {
             if let Some(v) = v {
-                inst.set_integer(&[vr], &[v]).map_err(fmi_err(format!("set {name}")))?;
+                inst.set_integer(&[vr], &[v])
+                    .map_err(fmi_err(format!("set {name}")))?;
             }
         }
-        let reals = [(r.sigma_torque, settings.sigma_torque, "sigma_torque"), (r.sigma_force, settings.sigma_force, "sigma_force"), (r.sigma_vision, settings.sigma_vision, "sigma_vision")];
+        let reals = [
+            (r.sigma_torque, settings.sigma_torque, "sigma_torque"),
+            (r.sigma_force, settings.sigma_force, "sigma_force"),
+            (r.sigma_vision, settings.sigma_vision, "sigma_vision"),
+        ];
         for (vr, v, name) in reals {
             if let Some(v) = v {
-                inst.set_real(&[vr], &[v]).map_err(fmi_err(format!("set {name}")))?;
+                inst.set_real(&[vr], &[v])
+                    .map_err(fmi_err(format!("set {name}")))?;
             }
         }
-        inst.setup_experiment(None, 0.0, None).map_err(fmi_err("fmi2SetupExperiment"))?;
-        Common::enter_initialization_mode(&mut inst).map_err(fmi_err("fmi2EnterInitializationMode"))?;
-        Common::exit_initialization_mode(&mut inst).map_err(fmi_err("fmi2ExitInitializationMode"))?;
-        Ok(Estimator { inst, refs: r.clone(), time: 0.0 })
+        inst.setup_experiment(None, 0.0, None)
+            .map_err(fmi_err("fmi2SetupExperiment"))?;
+        Common::enter_initialization_mode(&mut inst)
+            .map_err(fmi_err("fmi2EnterInitializationMode"))?;
+        Common::exit_initialization_mode(&mut inst)
+            .map_err(fmi_err("fmi2ExitInitializationMode"))?;
+        Ok(Estimator {
+            inst,
+            refs: r.clone(),
+            time: 0.0,
+        })
     }
 }
 
@@ -198,7 +245,9 @@ pub struct Estimator {
 
 impl Estimator {
     fn step(&mut self) -> Result<()> {
-        self.inst.do_step(self.time, STEP, true).map_err(fmi_err("fmi2DoStep"))?;
+        self.inst
+            .do_step(self.time, STEP, true)
+            .map_err(fmi_err("fmi2DoStep"))?;
         self.time += STEP;
         Ok(())
     }
@@ -209,9 +258,16 @@ impl Estimator {
     ///
     /// # Errors
     /// When the FMU refuses an input or the step.
-    pub fn measure(&mut self, wrench: [f64; 6], tcp: [f64; 3], image: Option<&Features>) -> Result<Estimate> {
+    pub fn measure(
+        &mut self,
+        wrench: [f64; 6],
+        tcp: [f64; 3],
+        image: Option<&Features>,
+    ) -> Result<Estimate> {
         let r = &self.refs;
-        self.inst.set_real(&r.wrench, &wrench).map_err(fmi_err("set wrench"))?;
+        self.inst
+            .set_real(&r.wrench, &wrench)
+            .map_err(fmi_err("set wrench"))?;
         self.pulse(r.contact, tcp, image)
     }
 
@@ -229,16 +285,26 @@ impl Estimator {
     /// measures on its rising edge), reads the estimate and lowers everything again.
     fn pulse(&mut self, trigger: u32, tcp: [f64; 3], image: Option<&Features>) -> Result<Estimate> {
         let r = self.refs.clone();
-        self.inst.set_real(&r.tcp, &[tcp[0], tcp[1], tcp[2], 0.0, 0.0, 0.0]).map_err(fmi_err("set tcp"))?;
+        self.inst
+            .set_real(&r.tcp, &[tcp[0], tcp[1], tcp[2], 0.0, 0.0, 0.0])
+            .map_err(fmi_err("set tcp"))?;
         if let Some(f) = image {
             let v = [f.distances[0], f.distances[1], f.passive[0], f.passive[1]];
-            self.inst.set_real(&r.features, &v).map_err(fmi_err("set vision features"))?;
-            self.inst.set_boolean(&[r.vision_valid], &[1]).map_err(fmi_err("set vision.valid"))?;
+            self.inst
+                .set_real(&r.features, &v)
+                .map_err(fmi_err("set vision features"))?;
+            self.inst
+                .set_boolean(&[r.vision_valid], &[1])
+                .map_err(fmi_err("set vision.valid"))?;
         }
-        self.inst.set_boolean(&[trigger], &[1]).map_err(fmi_err("set contact / vision.valid"))?;
+        self.inst
+            .set_boolean(&[trigger], &[1])
+            .map_err(fmi_err("set contact / vision.valid"))?;
         self.step()?;
         let estimate = self.estimate()?;
-        self.inst.set_boolean(&[r.contact, r.vision_valid], &[0, 0]).map_err(fmi_err("lower contact, vision.valid"))?;
+        self.inst
+            .set_boolean(&[r.contact, r.vision_valid], &[0, 0])
+            .map_err(fmi_err("lower contact, vision.valid"))?;
         self.step()?;
         Ok(estimate)
     }
@@ -249,12 +315,23 @@ impl Estimator {
     /// When the FMU refuses a get call.
     pub fn estimate(&mut self) -> Result<Estimate> {
         let r = &self.refs;
-        let (mut object, mut std, mut reals, mut ints, mut conv) = ([0.0; 2], [0.0; 2], [0.0; 2], [0; 2], [0]);
-        self.inst.get_real(&r.object, &mut object).map_err(fmi_err("get object"))?;
-        self.inst.get_real(&r.std, &mut std).map_err(fmi_err("get object std"))?;
-        self.inst.get_real(&r.reals, &mut reals).map_err(fmi_err("get confidence, ess"))?;
-        self.inst.get_integer(&r.ints, &mut ints).map_err(fmi_err("get measurements, clusters"))?;
-        self.inst.get_boolean(&[r.converged], &mut conv).map_err(fmi_err("get converged"))?;
+        let (mut object, mut std, mut reals, mut ints, mut conv) =
+            ([0.0; 2], [0.0; 2], [0.0; 2], [0; 2], [0]);
+        self.inst
+            .get_real(&r.object, &mut object)
+            .map_err(fmi_err("get object"))?;
+        self.inst
+            .get_real(&r.std, &mut std)
+            .map_err(fmi_err("get object std"))?;
+        self.inst
+            .get_real(&r.reals, &mut reals)
+            .map_err(fmi_err("get confidence, ess"))?;
+        self.inst
+            .get_integer(&r.ints, &mut ints)
+            .map_err(fmi_err("get measurements, clusters"))?;
+        self.inst
+            .get_boolean(&[r.converged], &mut conv)
+            .map_err(fmi_err("get converged"))?;
         Ok(Estimate {
             object,
             std,

@@ -39,7 +39,16 @@ pub struct HoughParams {
 
 impl Default for HoughParams {
     fn default() -> Self {
-        Self { band: 12.0, max_angle: 3.0, resolution: 0.5, min_gradient: 8.0, min_peak: 4.0, shrink: 0.2, stop_ratio: 0.35, min_support: 0.5 }
+        Self {
+            band: 12.0,
+            max_angle: 3.0,
+            resolution: 0.5,
+            min_gradient: 8.0,
+            min_peak: 4.0,
+            shrink: 0.2,
+            stop_ratio: 0.35,
+            min_support: 0.5,
+        }
     }
 }
 
@@ -52,17 +61,32 @@ const NEAR: f64 = 1.5;
 /// # Errors
 /// [`VisionError::FeatureNotFound`] when the expected line is too short, the parameters leave
 /// no Hough space, the accumulator's peak is too weak, or too few edge points support it.
-pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughParams) -> Result<Line, VisionError> {
+pub fn detect_line_hough(
+    grad: &Gradient,
+    expected: [[f64; 2]; 2],
+    p: &HoughParams,
+) -> Result<Line, VisionError> {
     let not_found = |why: String| Err(VisionError::FeatureNotFound(why));
     let [e0, e1] = expected;
     let (du, dv) = (e1[0] - e0[0], e1[1] - e0[1]);
     let len = du.hypot(dv);
     if !len.is_finite() || len < 4.0 {
-        return not_found(format!("expected line of {len} px, not a finite length of 4 px or more"));
+        return not_found(format!(
+            "expected line of {len} px, not a finite length of 4 px or more"
+        ));
     }
     // Below 45 degrees the peak line stays within 90 degrees of the expected major axis.
-    if !(p.band > 0.0 && p.max_angle >= 0.0 && p.max_angle < 45.0 && p.resolution >= 0.05 && p.shrink >= 0.0 && p.shrink < 0.5) {
-        return not_found(format!("no Hough space for band {}, max angle {}, resolution {}, shrink {}", p.band, p.max_angle, p.resolution, p.shrink));
+    if !(p.band > 0.0
+        && p.max_angle >= 0.0
+        && p.max_angle < 45.0
+        && p.resolution >= 0.05
+        && p.shrink >= 0.0
+        && p.shrink < 0.5)
+    {
+        return not_found(format!(
+            "no Hough space for band {}, max angle {}, resolution {}, shrink {}",
+            p.band, p.max_angle, p.resolution, p.shrink
+        ));
     }
     let (w, h) = (grad.width, grad.height);
     // Frame of the expected line: midpoint m, direction d, normal n0 (as in `detect_line`).
@@ -78,7 +102,11 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
     let half_len = 0.5 * len;
     let max_angle = p.max_angle.to_radians();
     let half_theta = (max_angle * 0.5 * len.min(diag) / p.resolution).ceil() as usize;
-    let dtheta = if half_theta == 0 { 0.0 } else { max_angle / half_theta as f64 };
+    let dtheta = if half_theta == 0 {
+        0.0
+    } else {
+        max_angle / half_theta as f64
+    };
     let n_rho = (2.0 * band / p.resolution).ceil() as usize + 1;
     let drho = 2.0 * band / (n_rho - 1) as f64;
     let phi0 = n0[1].atan2(n0[0]);
@@ -91,16 +119,33 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
     // Voting region: within the band (widened by the largest rotation) between the shrunk ends.
     let half_vote = half_len * (1.0 - 2.0 * p.shrink);
     if half_vote < 1.0 {
-        return not_found(format!("voting span of {:.1} px after shrinking by {}", 2.0 * half_vote, p.shrink));
+        return not_found(format!(
+            "voting span of {:.1} px after shrinking by {}",
+            2.0 * half_vote,
+            p.shrink
+        ));
     }
     let across = band + half_vote * max_angle.sin() + 1.0;
-    let ys = [-1.0, 1.0].map(|a| [-1.0, 1.0].map(|b| m[1] + a * half_vote * d[1] + b * across * n0[1]));
-    let (y0, y1) = ys.iter().flatten().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, r), y| (l.min(*y), r.max(*y)));
-    let (y0, y1) = (y0.floor().max(1.0) as i64, y1.ceil().min(h as f64 - 2.0) as i64);
+    let ys =
+        [-1.0, 1.0].map(|a| [-1.0, 1.0].map(|b| m[1] + a * half_vote * d[1] + b * across * n0[1]));
+    let (y0, y1) = ys
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, r), y| {
+            (l.min(*y), r.max(*y))
+        });
+    let (y0, y1) = (
+        y0.floor().max(1.0) as i64,
+        y1.ceil().min(h as f64 - 2.0) as i64,
+    );
     // Columns where |a rx + b ry| <= c at row offset ry.
     let slab = |a: f64, b: f64, c: f64, ry: f64| {
         if a.abs() < 1e-12 {
-            if (b * ry).abs() <= c { (f64::NEG_INFINITY, f64::INFINITY) } else { (f64::INFINITY, f64::NEG_INFINITY) }
+            if (b * ry).abs() <= c {
+                (f64::NEG_INFINITY, f64::INFINITY)
+            } else {
+                (f64::INFINITY, f64::NEG_INFINITY)
+            }
         } else {
             let (l, r) = ((-c - b * ry) / a, (c - b * ry) / a);
             if a > 0.0 { (l, r) } else { (r, l) }
@@ -111,8 +156,14 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
     let mut voters = Vec::new();
     for y in y0..=y1 {
         let ry = y as f64 - m[1];
-        let ((l0, r0), (l1, r1)) = (slab(d[0], d[1], half_vote, ry), slab(n0[0], n0[1], across, ry));
-        let (x0, x1) = ((m[0] + l0.max(l1)).ceil().max(1.0), (m[0] + r0.min(r1)).floor().min(w as f64 - 2.0));
+        let ((l0, r0), (l1, r1)) = (
+            slab(d[0], d[1], half_vote, ry),
+            slab(n0[0], n0[1], across, ry),
+        );
+        let (x0, x1) = (
+            (m[0] + l0.max(l1)).ceil().max(1.0),
+            (m[0] + r0.min(r1)).floor().min(w as f64 - 2.0),
+        );
         for x in x0 as i64..=x1 as i64 {
             let g = grad.along(x, y, nf);
             if g >= p.min_gradient {
@@ -140,7 +191,10 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
     let (mut best, mut bk, mut bi) = (0.0f64, 0usize, 0usize);
     for (k, row) in acc.chunks_exact(n_rho).enumerate() {
         for i in 0..n_rho {
-            let v = row[i] + 0.5 * (if i > 0 { row[i - 1] } else { 0.0 } + row.get(i + 1).copied().unwrap_or(0.0));
+            let v = row[i]
+                + 0.5
+                    * (if i > 0 { row[i - 1] } else { 0.0 }
+                        + row.get(i + 1).copied().unwrap_or(0.0));
             if v > best {
                 (best, bk, bi) = (v, k, i);
             }
@@ -148,7 +202,10 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
     }
     let mean = best / (2.0 * half_vote);
     if mean < f64::from(p.min_peak) {
-        return not_found(format!("Hough peak's mean gradient {mean:.2} below {} (band {band} px, max angle {} deg)", p.min_peak, p.max_angle));
+        return not_found(format!(
+            "Hough peak's mean gradient {mean:.2} below {} (band {band} px, max angle {} deg)",
+            p.min_peak, p.max_angle
+        ));
     }
     let n = normals[bk];
     let rho = bi as f64 * drho - band;
@@ -157,7 +214,10 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
     let st = |q: [f64; 2]| if steep { [q[1], q[0]] } else { q };
     let xy = |s: f64, t: f64| if steep { [t, s] } else { [s, t] };
     // The peak line t = a s + b: through m + rho n, along (n.y, -n.x).
-    let (q, dir) = (st([m[0] + rho * n[0], m[1] + rho * n[1]]), st([n[1], -n[0]]));
+    let (q, dir) = (
+        st([m[0] + rho * n[0], m[1] + rho * n[1]]),
+        st([n[1], -n[0]]),
+    );
     let a = dir[1] / dir[0];
     let b = q[1] - a * q[0];
     let nf = [n[0] as f32, n[1] as f32];
@@ -166,7 +226,10 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
         std::mem::swap(&mut a0, &mut a1);
     }
     let span = a1[0] - a0[0];
-    let (s0, s1) = ((a0[0] + p.shrink * span).ceil(), (a1[0] - p.shrink * span).floor());
+    let (s0, s1) = (
+        (a0[0] + p.shrink * span).ceil(),
+        (a1[0] - p.shrink * span).floor(),
+    );
     let searched = (s1 - s0 + 1.0).max(1.0);
     let smax = if steep { h } else { w };
     let mut pts = Vec::new();
@@ -183,19 +246,37 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
     }
     let axis = if steep { "rows" } else { "columns" };
     if (pts.len() as f64) < p.min_support * searched {
-        return not_found(format!("{} of {searched} {axis} have a gradient above {} within {NEAR} px of the Hough peak line", pts.len(), p.min_gradient));
+        return not_found(format!(
+            "{} of {searched} {axis} have a gradient above {} within {NEAR} px of the Hough peak line",
+            pts.len(),
+            p.min_gradient
+        ));
     }
-    let Some((mut a, mut b)) = robust_fit(&mut pts, NEAR) else { return not_found("degenerate edge points".into()) };
+    let Some((mut a, mut b)) = robust_fit(&mut pts, NEAR) else {
+        return not_found("degenerate edge points".into());
+    };
     if (pts.len() as f64) < p.min_support * searched {
-        return not_found(format!("only {} of {searched} edge points lie on one line", pts.len()));
+        return not_found(format!(
+            "only {} of {searched} edge points lie on one line",
+            pts.len()
+        ));
     }
     // Extend along the fitted line while the gradient holds, then fit again.
     grads.sort_by(f32::total_cmp);
     let stop = (grads[grads.len() / 2] * p.stop_ratio).max(p.min_gradient);
-    let (first, last) = pts.iter().fold((i64::MAX, i64::MIN), |(l, r), q| (l.min(q[0] as i64), r.max(q[0] as i64)));
+    let (first, last) = pts.iter().fold((i64::MAX, i64::MIN), |(l, r), q| {
+        (l.min(q[0] as i64), r.max(q[0] as i64))
+    });
     for dir in [-1i64, 1] {
         let mut s = if dir < 0 { first - 1 } else { last + 1 };
-        while let Some((t, g)) = peak(grad, steep, nf, s, a * s as f64 + b - NEAR, a * s as f64 + b + NEAR) {
+        while let Some((t, g)) = peak(
+            grad,
+            steep,
+            nf,
+            s,
+            a * s as f64 + b - NEAR,
+            a * s as f64 + b + NEAR,
+        ) {
             if g < stop {
                 break;
             }
@@ -203,10 +284,21 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
             s += dir;
         }
     }
-    let Some(ab) = robust_fit(&mut pts, NEAR) else { return not_found("degenerate edge points".into()) };
+    let Some(ab) = robust_fit(&mut pts, NEAR) else {
+        return not_found("degenerate edge points".into());
+    };
     (a, b) = ab;
-    let (sl, sr) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, r), q| (l.min(q[0]), r.max(q[0])));
-    let rms = (pts.iter().map(|q| (q[1] - a * q[0] - b).powi(2)).sum::<f64>() / pts.len() as f64).sqrt();
+    let (sl, sr) = pts
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, r), q| {
+            (l.min(q[0]), r.max(q[0]))
+        });
+    let rms = (pts
+        .iter()
+        .map(|q| (q[1] - a * q[0] - b).powi(2))
+        .sum::<f64>()
+        / pts.len() as f64)
+        .sqrt();
     let mut line = Line::through(xy(sl, a * sl + b), xy(sr, a * sr + b), w, h);
     line.points = pts.len();
     line.rms = rms;
@@ -216,9 +308,22 @@ pub fn detect_line_hough(grad: &Gradient, expected: [[f64; 2]; 2], p: &HoughPara
 /// Sub-pixel maximum of the gradient along `n` at major coordinate `s`, t in [lo, hi]
 /// (a parabola through the peak); `None` outside the image.
 fn peak(grad: &Gradient, steep: bool, n: [f32; 2], s: i64, lo: f64, hi: f64) -> Option<(f64, f32)> {
-    let (smax, tmax) = if steep { (grad.height, grad.width) } else { (grad.width, grad.height) };
-    let at = |t: i64| if steep { grad.along(t, s, n) } else { grad.along(s, t, n) };
-    let (lo, hi) = (lo.ceil().max(1.0) as i64, hi.floor().min(tmax as f64 - 2.0) as i64);
+    let (smax, tmax) = if steep {
+        (grad.height, grad.width)
+    } else {
+        (grad.width, grad.height)
+    };
+    let at = |t: i64| {
+        if steep {
+            grad.along(t, s, n)
+        } else {
+            grad.along(s, t, n)
+        }
+    };
+    let (lo, hi) = (
+        lo.ceil().max(1.0) as i64,
+        hi.floor().min(tmax as f64 - 2.0) as i64,
+    );
     if s < 1 || s >= smax as i64 - 1 || lo > hi {
         return None;
     }
@@ -231,7 +336,11 @@ fn peak(grad: &Gradient, steep: bool, n: [f32; 2], s: i64, lo: f64, hi: f64) -> 
     }
     let (gm, gp) = (at(bt - 1), at(bt + 1));
     let den = gm - 2.0 * best + gp;
-    let dt = if den < 0.0 { (0.5 * (gm - gp) / den).clamp(-0.5, 0.5) } else { 0.0 };
+    let dt = if den < 0.0 {
+        (0.5 * (gm - gp) / den).clamp(-0.5, 0.5)
+    } else {
+        0.0
+    };
     Some((bt as f64 + f64::from(dt), best))
 }
 
@@ -249,7 +358,10 @@ mod tests {
     fn expected(angle: f64, p: [f64; 2], off: f64, tilt: f64) -> [[f64; 2]; 2] {
         let (s, c) = (angle + tilt).to_radians().sin_cos();
         let q = [p[0] - off * s, p[1] + off * c];
-        [[q[0] - 120.0 * c, q[1] - 120.0 * s], [q[0] + 120.0 * c, q[1] + 120.0 * s]]
+        [
+            [q[0] - 120.0 * c, q[1] - 120.0 * s],
+            [q[0] + 120.0 * c, q[1] + 120.0 * s],
+        ]
     }
 
     #[test]
@@ -266,9 +378,22 @@ mod tests {
             add_noise(&mut g, 5.0, seed);
             let grad = Gradient::sobel(W, H, &g);
             // Ground truth independent of the detectors: the generator's line.
-            let truth = Line::through(p, [p[0] + 100.0 * f64::to_radians(angle).cos(), p[1] + 100.0 * f64::to_radians(angle).sin()], W, H);
+            let truth = Line::through(
+                p,
+                [
+                    p[0] + 100.0 * f64::to_radians(angle).cos(),
+                    p[1] + 100.0 * f64::to_radians(angle).sin(),
+                ],
+                W,
+                H,
+            );
             for (off, tilt) in [(4.0, 1.0), (-4.0, -1.0)] {
-                let l = detect_line_hough(&grad, expected(angle, p, off, tilt), &HoughParams::default()).unwrap_or_else(|e| panic!("angle {angle}: {e}"));
+                let l = detect_line_hough(
+                    &grad,
+                    expected(angle, p, off, tilt),
+                    &HoughParams::default(),
+                )
+                .unwrap_or_else(|e| panic!("angle {angle}: {e}"));
                 let mut da = l.angle - truth.angle;
                 if da > 90.0 {
                     da -= 180.0;
@@ -282,9 +407,15 @@ mod tests {
                 );
                 assert!(da.abs() < 0.2, "angle {angle}: error {da} deg ({l:?})");
                 assert!(l.distance(p, W, H).abs() < 0.5, "angle {angle}: {l:?}");
-                assert!(dist.iter().all(|e| *e < 0.5), "angle {angle}: endpoints {dist:?} px off the true line");
+                assert!(
+                    dist.iter().all(|e| *e < 0.5),
+                    "angle {angle}: endpoints {dist:?} px off the true line"
+                );
                 // The extension reaches beyond the shrunken expected span.
-                assert!((l.p1[0] - l.p0[0]).hypot(l.p1[1] - l.p0[1]) > 0.6 * 240.0, "{l:?}");
+                assert!(
+                    (l.p1[0] - l.p0[0]).hypot(l.p1[1] - l.p0[1]) > 0.6 * 240.0,
+                    "{l:?}"
+                );
             }
         }
     }
@@ -294,8 +425,18 @@ mod tests {
         let mut g = vec![100.0f32; W * H];
         add_noise(&mut g, 5.0, 9);
         let grad = Gradient::sobel(W, H, &g);
-        let r = detect_line_hough(&grad, [[300.0, 100.0], [310.0, 380.0]], &HoughParams { band: 40.0, ..HoughParams::default() });
-        assert!(matches!(&r, Err(VisionError::FeatureNotFound(why)) if why.contains("peak")), "{r:?}");
+        let r = detect_line_hough(
+            &grad,
+            [[300.0, 100.0], [310.0, 380.0]],
+            &HoughParams {
+                band: 40.0,
+                ..HoughParams::default()
+            },
+        );
+        assert!(
+            matches!(&r, Err(VisionError::FeatureNotFound(why)) if why.contains("peak")),
+            "{r:?}"
+        );
     }
 
     #[test]
@@ -306,12 +447,16 @@ mod tests {
         add_noise(&mut g, 5.0, 10);
         let grad = Gradient::sobel(W, H, &g);
         let r = detect_line_hough(&grad, expected(angle, p, 3.0, 0.5), &HoughParams::default());
-        assert!(matches!(&r, Err(VisionError::FeatureNotFound(why)) if why.contains("have a gradient")), "{r:?}");
+        assert!(
+            matches!(&r, Err(VisionError::FeatureNotFound(why)) if why.contains("have a gradient")),
+            "{r:?}"
+        );
         // The same edge along the whole span is found.
         let mut g = step(angle, p, |_| true);
         add_noise(&mut g, 5.0, 10);
         let grad = Gradient::sobel(W, H, &g);
-        let l = detect_line_hough(&grad, expected(angle, p, 3.0, 0.5), &HoughParams::default()).expect("edge found");
+        let l = detect_line_hough(&grad, expected(angle, p, 3.0, 0.5), &HoughParams::default())
+            .expect("edge found");
         assert!(l.distance(p, W, H).abs() < 0.5, "{l:?}");
     }
 
@@ -321,24 +466,64 @@ mod tests {
         let (angle, p) = (-60.0, [330.0, 230.0]);
         let (s, c) = f64::to_radians(angle).sin_cos();
         let strong = [p[0] - 8.0 * s, p[1] + 8.0 * c];
-        let g: Vec<f32> =
-            step(angle, p, |_| true).iter().zip(step(angle, strong, |_| true)).map(|(a, b)| 40.0 + (a - 40.0) / 3.0 + (b - 40.0) * 2.0 / 3.0).collect();
+        let g: Vec<f32> = step(angle, p, |_| true)
+            .iter()
+            .zip(step(angle, strong, |_| true))
+            .map(|(a, b)| 40.0 + (a - 40.0) / 3.0 + (b - 40.0) * 2.0 / 3.0)
+            .collect();
         let grad = Gradient::sobel(W, H, &g);
-        let l = detect_line_hough(&grad, expected(angle, p, 4.0, 0.0), &HoughParams::default()).expect("edge found");
+        let l = detect_line_hough(&grad, expected(angle, p, 4.0, 0.0), &HoughParams::default())
+            .expect("edge found");
         assert!(l.distance(strong, W, H).abs() < 0.5, "{l:?}");
         for (e, params) in [
             ([[10.0, 10.0], [12.0, 11.0]], HoughParams::default()),
             ([[f64::NAN, 10.0], [200.0, 11.0]], HoughParams::default()),
-            ([[10.0, 10.0], [200.0, 11.0]], HoughParams { band: 0.0, ..HoughParams::default() }),
-            ([[10.0, 10.0], [200.0, 11.0]], HoughParams { shrink: 0.5, ..HoughParams::default() }),
-            ([[10.0, 10.0], [200.0, 11.0]], HoughParams { resolution: f64::NAN, ..HoughParams::default() }),
-            ([[10.0, 10.0], [200.0, 11.0]], HoughParams { max_angle: 45.0, ..HoughParams::default() }),
-            ([[f64::INFINITY, 10.0], [200.0, 11.0]], HoughParams::default()),
+            (
+                [[10.0, 10.0], [200.0, 11.0]],
+                HoughParams {
+                    band: 0.0,
+                    ..HoughParams::default()
+                },
+            ),
+            (
+                [[10.0, 10.0], [200.0, 11.0]],
+                HoughParams {
+                    shrink: 0.5,
+                    ..HoughParams::default()
+                },
+            ),
+            (
+                [[10.0, 10.0], [200.0, 11.0]],
+                HoughParams {
+                    resolution: f64::NAN,
+                    ..HoughParams::default()
+                },
+            ),
+            (
+                [[10.0, 10.0], [200.0, 11.0]],
+                HoughParams {
+                    max_angle: 45.0,
+                    ..HoughParams::default()
+                },
+            ),
+            (
+                [[f64::INFINITY, 10.0], [200.0, 11.0]],
+                HoughParams::default(),
+            ),
             // Far beyond the image (a projection near the camera plane): refused quickly, no huge Hough space.
-            ([[-1e12, 40.0], [1e12, 45.0]], HoughParams { band: 1e9, ..HoughParams::default() }),
+            (
+                [[-1e12, 40.0], [1e12, 45.0]],
+                HoughParams {
+                    band: 1e9,
+                    ..HoughParams::default()
+                },
+            ),
         ] {
             let r = detect_line_hough(&grad, e, &params);
-            assert!(matches!(r, Err(VisionError::FeatureNotFound(_))), "{e:?} {params:?}: {r:?}");
+            assert!(
+                matches!(r, Err(VisionError::FeatureNotFound(_))),
+                "{e:?} {params:?}: {r:?}"
+            );
         }
     }
 }

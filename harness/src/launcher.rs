@@ -12,7 +12,9 @@ const LIBRARY: &str = "libmujoco.so.3.17.0";
 
 fn main() -> ExitCode {
     let override_dir = std::env::var_os("FTFUSION_MUJOCO_DIR").map(PathBuf::from);
-    let dir = override_dir.clone().unwrap_or_else(|| PathBuf::from(env!("HARNESS_MUJOCO_DIR")));
+    let dir = override_dir
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(env!("HARNESS_MUJOCO_DIR")));
     let on_loader_path = std::env::var_os("LD_LIBRARY_PATH")
         .map(|p| std::env::split_paths(&p).any(|d| d.join(LIBRARY).is_file()))
         .unwrap_or(false);
@@ -21,7 +23,11 @@ fn main() -> ExitCode {
             "error: the MuJoCo 3.17.0 library is missing: {} does not exist{}.\n\
              Install it with `bash scripts/setup.sh` (it takes the library from the PyPI wheel mujoco==3.17.0).",
             dir.join(LIBRARY).display(),
-            if override_dir.is_some() { " (FTFUSION_MUJOCO_DIR)" } else { " and LD_LIBRARY_PATH has none" }
+            if override_dir.is_some() {
+                " (FTFUSION_MUJOCO_DIR)"
+            } else {
+                " and LD_LIBRARY_PATH has none"
+            }
         );
         return ExitCode::from(2);
     }
@@ -36,7 +42,11 @@ fn main() -> ExitCode {
     cmd.args(std::env::args_os().skip(1));
     if let Some(d) = override_dir {
         let mut paths = vec![d];
-        paths.extend(std::env::var_os("LD_LIBRARY_PATH").iter().flat_map(std::env::split_paths));
+        paths.extend(
+            std::env::var_os("LD_LIBRARY_PATH")
+                .iter()
+                .flat_map(std::env::split_paths),
+        );
         if let Ok(joined) = std::env::join_paths(paths) {
             cmd.env("LD_LIBRARY_PATH", joined);
         }

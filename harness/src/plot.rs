@@ -7,15 +7,18 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::error::{HarnessError, Result};
 use crate::campaign::TrialRow;
+use crate::error::{HarnessError, Result};
 use crate::fmu_driver::Estimate;
 use crate::trial::TrialResult;
 
 type Draw = std::result::Result<(), Box<dyn std::error::Error>>;
 
 fn wrap(path: &Path, r: Draw) -> Result<()> {
-    r.map_err(|e| HarnessError::Plot { path: path.to_owned(), reason: e.to_string() })
+    r.map_err(|e| HarnessError::Plot {
+        path: path.to_owned(),
+        reason: e.to_string(),
+    })
 }
 
 fn ensure_dir(path: &Path) -> Result<()> {
@@ -44,19 +47,38 @@ struct Panel {
 
 /// The first three measurements of a trial as panels.
 fn panels(trial: &TrialResult) -> Vec<Panel> {
-    let mut out: Vec<Panel> = trial.first_look.iter().map(|e| Panel { caption: "after the first image (no contact)".into(), tcps: Vec::new(), estimate: Some(*e) }).collect();
+    let mut out: Vec<Panel> = trial
+        .first_look
+        .iter()
+        .map(|e| Panel {
+            caption: "after the first image (no contact)".into(),
+            tcps: Vec::new(),
+            estimate: Some(*e),
+        })
+        .collect();
     for (k, st) in trial.steps.iter().enumerate() {
         let caption = match (st.estimate, st.image) {
             (Some(_), true) => format!("after contact {} + image", k + 1),
             (Some(_), false) => format!("after contact {}", k + 1),
             (None, _) => format!("contact {}: inserted", k + 1),
         };
-        let tcps = trial.steps[..=k].iter().map(|s| (s.tcp[0] * 1e3, s.tcp[1] * 1e3)).collect();
-        out.push(Panel { caption, tcps, estimate: st.estimate });
+        let tcps = trial.steps[..=k]
+            .iter()
+            .map(|s| (s.tcp[0] * 1e3, s.tcp[1] * 1e3))
+            .collect();
+        out.push(Panel {
+            caption,
+            tcps,
+            estimate: st.estimate,
+        });
     }
     out.truncate(3);
     while out.len() < 3 {
-        out.push(Panel { caption: "none (done)".into(), tcps: Vec::new(), estimate: None });
+        out.push(Panel {
+            caption: "none (done)".into(),
+            tcps: Vec::new(),
+            estimate: None,
+        });
     }
     out
 }
@@ -68,7 +90,14 @@ fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
     let panels = panels(trial);
     let truth = (trial.offset[0] * 1e3, trial.offset[1] * 1e3);
     // Top row: Omega; bottom row: about the true offset, wide enough for every 2-sigma ellipse.
-    let spread = panels.iter().filter_map(|p| p.estimate).map(|e| 2.0 * e.std[0].max(e.std[1]) + (e.object[0] - trial.offset[0]).hypot(e.object[1] - trial.offset[1])).fold(0.0, f64::max);
+    let spread = panels
+        .iter()
+        .filter_map(|p| p.estimate)
+        .map(|e| {
+            2.0 * e.std[0].max(e.std[1])
+                + (e.object[0] - trial.offset[0]).hypot(e.object[1] - trial.offset[1])
+        })
+        .fold(0.0, f64::max);
     let zoom = (1.2 * spread).clamp(2.5e-4, size) * 1e3;
     let s = size * 1e3;
     for (k, area) in areas.iter().enumerate() {
@@ -76,14 +105,39 @@ fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
         let (xr, yr, caption) = if k < 3 {
             (-s..s, -s..s, panel.caption.clone())
         } else {
-            ((truth.0 - zoom)..(truth.0 + zoom), (truth.1 - zoom)..(truth.1 + zoom), format!("{} (zoom)", panel.caption))
+            (
+                (truth.0 - zoom)..(truth.0 + zoom),
+                (truth.1 - zoom)..(truth.1 + zoom),
+                format!("{} (zoom)", panel.caption),
+            )
         };
-        let shown: Vec<(f64, f64)> = panel.tcps.iter().copied().filter(|p| xr.contains(&p.0) && yr.contains(&p.1)).collect();
-        let mut chart = ChartBuilder::on(area).caption(caption, ("sans-serif", 20)).margin(10).x_label_area_size(40).y_label_area_size(55).build_cartesian_2d(xr, yr)?;
-        chart.configure_mesh().x_desc("object.x [mm]").y_desc("object.y [mm]").draw()?;
-        chart.draw_series(std::iter::once(Cross::new(truth, 9, RED.stroke_width(3))))?.label("true offset").legend(|(x, y)| Cross::new((x, y), 5, RED.stroke_width(2)));
+        let shown: Vec<(f64, f64)> = panel
+            .tcps
+            .iter()
+            .copied()
+            .filter(|p| xr.contains(&p.0) && yr.contains(&p.1))
+            .collect();
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(55)
+            .build_cartesian_2d(xr, yr)?;
         chart
-            .draw_series(shown.iter().map(|p| TriangleMarker::new(*p, 7, BLACK.filled())))?
+            .configure_mesh()
+            .x_desc("object.x [mm]")
+            .y_desc("object.y [mm]")
+            .draw()?;
+        chart
+            .draw_series(std::iter::once(Cross::new(truth, 9, RED.stroke_width(3))))?
+            .label("true offset")
+            .legend(|(x, y)| Cross::new((x, y), 5, RED.stroke_width(2)));
+        chart
+            .draw_series(
+                shown
+                    .iter()
+                    .map(|p| TriangleMarker::new(*p, 7, BLACK.filled())),
+            )?
             .label("contact points")
             .legend(|(x, y)| TriangleMarker::new((x, y), 5, BLACK.filled()));
         if let Some(e) = panel.estimate {
@@ -92,7 +146,10 @@ fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
                 let ring: Vec<(f64, f64)> = (0..=72)
                     .map(|i| {
                         let t = std::f64::consts::TAU * i as f64 / 72.0;
-                        (cx + n * e.std[0] * 1e3 * t.cos(), cy + n * e.std[1] * 1e3 * t.sin())
+                        (
+                            cx + n * e.std[0] * 1e3 * t.cos(),
+                            cy + n * e.std[1] * 1e3 * t.sin(),
+                        )
                     })
                     .collect();
                 chart.draw_series(LineSeries::new(ring, colour.stroke_width(2)))?;
@@ -103,7 +160,11 @@ fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
                 .legend(|(x, y)| Circle::new((x, y), 4, BLUE.filled()));
         }
         if k < 3 {
-            chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()?;
         }
     }
     root.present()?;
@@ -123,27 +184,50 @@ fn draw_contacts_per_trial(path: &Path, names: [&str; 2], runs: [&[TrialRow]; 2]
     let root = BitMapBackend::new(path, (1000, 520)).into_drawing_area();
     root.fill(&WHITE)?;
     let n = runs[0].len().max(runs[1].len()).max(1);
-    let top = runs.iter().flat_map(|r| r.iter().map(|t| t.contacts)).max().unwrap_or(1) as f64 + 1.0;
+    let top = runs
+        .iter()
+        .flat_map(|r| r.iter().map(|t| t.contacts))
+        .max()
+        .unwrap_or(1) as f64
+        + 1.0;
     let mut chart = ChartBuilder::on(&root)
         .caption("contact motions per trial", ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(50)
         .build_cartesian_2d(-0.5..n as f64 - 0.5, 0.0..top)?;
-    chart.configure_mesh().x_desc("trial").y_desc("contacts").draw()?;
+    chart
+        .configure_mesh()
+        .x_desc("trial")
+        .y_desc("contacts")
+        .draw()?;
     for (k, (name, run)) in names.iter().zip(runs).enumerate() {
         let colour = if k == 0 { BLUE } else { RED };
         let dx = if k == 0 { -0.15 } else { 0.15 };
         let mean = run.iter().map(|t| t.contacts as f64).sum::<f64>() / run.len().max(1) as f64;
         chart
             .draw_series(run.iter().enumerate().map(|(i, t)| {
-                let style = if t.success { colour.filled() } else { BLACK.filled() };
-                Rectangle::new([(i as f64 + dx - 0.13, 0.0), (i as f64 + dx + 0.13, t.contacts as f64)], style)
+                let style = if t.success {
+                    colour.filled()
+                } else {
+                    BLACK.filled()
+                };
+                Rectangle::new(
+                    [
+                        (i as f64 + dx - 0.13, 0.0),
+                        (i as f64 + dx + 0.13, t.contacts as f64),
+                    ],
+                    style,
+                )
             }))?
             .label(format!("{name} (mean {mean:.2}; black: failed)"))
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], colour.filled()));
     }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
     root.present()?;
     Ok(())
 }
@@ -161,21 +245,51 @@ fn draw_sweep(path: &Path, results: &[TrialResult], size: f64, cell: f64) -> Dra
     let root = BitMapBackend::new(path, (820, 760)).into_drawing_area();
     root.fill(&WHITE)?;
     let (s, h) = ((size + cell / 2.0) * 1e3, cell * 1e3 / 2.0);
-    let max = results.iter().filter(|r| r.success).map(|r| r.contacts).max().unwrap_or(1).max(2) as f64;
+    let max = results
+        .iter()
+        .filter(|r| r.success)
+        .map(|r| r.contacts)
+        .max()
+        .unwrap_or(1)
+        .max(2) as f64;
     let mut chart = ChartBuilder::on(&root)
         .caption("contact motions per true offset", ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(45)
         .y_label_area_size(55)
         .build_cartesian_2d(-s..s, -s..s)?;
-    chart.configure_mesh().x_desc("object.x [mm]").y_desc("object.y [mm]").disable_mesh().draw()?;
+    chart
+        .configure_mesh()
+        .x_desc("object.x [mm]")
+        .y_desc("object.y [mm]")
+        .disable_mesh()
+        .draw()?;
     for r in results {
         let (x, y) = (r.offset[0] * 1e3, r.offset[1] * 1e3);
-        let colour = if r.success { ViridisRGB::get_color((r.contacts as f64 - 1.0) / (max - 1.0)) } else { BLACK };
-        chart.draw_series(std::iter::once(Rectangle::new([(x - h, y - h), (x + h, y + h)], colour.filled())))?;
-        let label = if r.success { r.contacts.to_string() } else { "x".into() };
-        let text_colour = if r.success && (r.contacts as f64) > 0.6 * max { BLACK } else { WHITE };
-        chart.draw_series(std::iter::once(Text::new(label, (x - h * 0.3, y + h * 0.3), ("sans-serif", 14).into_font().color(&text_colour))))?;
+        let colour = if r.success {
+            ViridisRGB::get_color((r.contacts as f64 - 1.0) / (max - 1.0))
+        } else {
+            BLACK
+        };
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [(x - h, y - h), (x + h, y + h)],
+            colour.filled(),
+        )))?;
+        let label = if r.success {
+            r.contacts.to_string()
+        } else {
+            "x".into()
+        };
+        let text_colour = if r.success && (r.contacts as f64) > 0.6 * max {
+            BLACK
+        } else {
+            WHITE
+        };
+        chart.draw_series(std::iter::once(Text::new(
+            label,
+            (x - h * 0.3, y + h * 0.3),
+            ("sans-serif", 14).into_font().color(&text_colour),
+        )))?;
     }
     root.present()?;
     Ok(())
@@ -185,26 +299,47 @@ fn draw_sweep(path: &Path, results: &[TrialResult], size: f64, cell: f64) -> Dra
 ///
 /// # Errors
 /// When the image cannot be written.
-pub fn agreement(path: &Path, names: &[&str], pairs: &[Vec<(f64, f64)>], labels: [&str; 2]) -> Result<()> {
+pub fn agreement(
+    path: &Path,
+    names: &[&str],
+    pairs: &[Vec<(f64, f64)>],
+    labels: [&str; 2],
+) -> Result<()> {
     ensure_dir(path)?;
     wrap(path, draw_agreement(path, names, pairs, labels))
 }
 
-fn draw_agreement(path: &Path, names: &[&str], pairs: &[Vec<(f64, f64)>], labels: [&str; 2]) -> Draw {
+fn draw_agreement(
+    path: &Path,
+    names: &[&str],
+    pairs: &[Vec<(f64, f64)>],
+    labels: [&str; 2],
+) -> Draw {
     let root = BitMapBackend::new(path, (520 * names.len().max(1) as u32, 520)).into_drawing_area();
     root.fill(&WHITE)?;
     let panels = root.split_evenly((1, names.len().max(1)));
     for ((area, name), pts) in panels.iter().zip(names).zip(pairs) {
-        let m = pts.iter().flat_map(|p| [p.0.abs(), p.1.abs()]).fold(1e-9, f64::max) * 1.05;
+        let m = pts
+            .iter()
+            .flat_map(|p| [p.0.abs(), p.1.abs()])
+            .fold(1e-9, f64::max)
+            * 1.05;
         let mut chart = ChartBuilder::on(area)
             .caption(*name, ("sans-serif", 20))
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(60)
             .build_cartesian_2d(-m..m, -m..m)?;
-        chart.configure_mesh().x_desc(labels[0]).y_desc(labels[1]).draw()?;
+        chart
+            .configure_mesh()
+            .x_desc(labels[0])
+            .y_desc(labels[1])
+            .draw()?;
         chart.draw_series(LineSeries::new([(-m, -m), (m, m)], BLACK.mix(0.5)))?;
-        chart.draw_series(pts.iter().map(|p| Circle::new(*p, 2, BLUE.mix(0.5).filled())))?;
+        chart.draw_series(
+            pts.iter()
+                .map(|p| Circle::new(*p, 2, BLUE.mix(0.5).filled())),
+        )?;
     }
     root.present()?;
     Ok(())

@@ -17,7 +17,10 @@ pub fn check_mujoco() -> Result<()> {
     if got == MUJOCO_VERSION {
         Ok(())
     } else {
-        Err(HarnessError::MujocoVersion { expected: MUJOCO_VERSION, got })
+        Err(HarnessError::MujocoVersion {
+            expected: MUJOCO_VERSION,
+            got,
+        })
     }
 }
 

@@ -21,10 +21,17 @@ pub fn scan(sim: &mut Sim, task: &Task, step: f64, size: f64) -> Result<FtMap> {
     if names != ["object.x", "object.y"] {
         return Err(HarnessError::Invalid {
             what: "scan",
-            reason: format!("scans object.x, object.y only; task {} has {}", task.name, names.join(", ")),
+            reason: format!(
+                "scans object.x, object.y only; task {} has {}",
+                task.name,
+                names.join(", ")
+            ),
         });
     }
-    let axes = dofs.iter().map(|d| GridAxis::symmetric(*d, size, step)).collect::<ftmap::Result<Vec<_>>>()?;
+    let axes = dofs
+        .iter()
+        .map(|d| GridAxis::symmetric(*d, size, step))
+        .collect::<ftmap::Result<Vec<_>>>()?;
     let grid = Grid::new(axes)?;
     let mut map = FtMap::zeros(grid.clone(), meta(task)?);
     let bar = ProgressBar::new(grid.cells() as u64);
@@ -53,7 +60,10 @@ fn meta(task: &Task) -> Result<MapMeta> {
     let source = |role: &str, path: &std::path::Path| -> Result<SourceMesh> {
         Ok(SourceMesh {
             role: role.into(),
-            file: path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
+            file: path
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default(),
             sha256: Mesh::load(path)?.sha256,
         })
     };
@@ -65,8 +75,14 @@ fn meta(task: &Task) -> Result<MapMeta> {
         friction: task.contact.friction,
         sensor_origin: task.contact.sensor_origin,
         pixel: 0.0,
-        sources: vec![source("A", &task.part_a.mesh)?, source("B", &task.part_b.mesh)?],
-        generator: format!("harness {} scan (MuJoCo {})", env!("CARGO_PKG_VERSION"), mujoco_rs::mujoco_version()),
+        sources: vec![
+            source("A", &task.part_a.mesh)?,
+            source("B", &task.part_b.mesh)?,
+        ],
+        generator: format!(
+            "harness {} scan (MuJoCo {})",
+            env!("CARGO_PKG_VERSION"),
+            mujoco_rs::mujoco_version()
+        ),
     })
 }
-

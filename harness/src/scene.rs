@@ -22,8 +22,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use ftmap::Task;
+use ftmap::task::cad::{self, Geometry, Role};
 use ftmap::vision::Camera;
-use ftmap::cad::{self, Geometry, Role};
 
 use crate::error::{HarnessError, Result};
 
@@ -103,7 +103,10 @@ impl Outline {
                     let n = (len / pitch).ceil().max(1.0) as usize;
                     for k in 0..n {
                         let t = k as f64 / n as f64;
-                        pts.push([s * (a[0] + t * (b[0] - a[0])), s * (a[1] + t * (b[1] - a[1]))]);
+                        pts.push([
+                            s * (a[0] + t * (b[0] - a[0])),
+                            s * (a[1] + t * (b[1] - a[1])),
+                        ]);
                     }
                 }
                 pts
@@ -135,12 +138,18 @@ impl Face {
             pts.extend(inner.ring(r, p));
         }
         let row = p * 3f64.sqrt() / 2.0;
-        let (ni, nj) = ((self.reach / p).ceil() as i64 + 1, (self.reach / row).ceil() as i64 + 1);
+        let (ni, nj) = (
+            (self.reach / p).ceil() as i64 + 1,
+            (self.reach / row).ceil() as i64 + 1,
+        );
         for j in -nj..=nj {
             let shift = if j.rem_euclid(2) == 1 { 0.5 * p } else { 0.0 };
             for i in -ni..=ni {
                 let q = [i as f64 * p + shift, j as f64 * row];
-                let outside_inner = self.inner.as_ref().is_none_or(|o| -o.inside(q) >= near_edge);
+                let outside_inner = self
+                    .inner
+                    .as_ref()
+                    .is_none_or(|o| -o.inside(q) >= near_edge);
                 if self.outer.inside(q) >= near_edge && outside_inner {
                     pts.push(q);
                 }
@@ -237,17 +246,30 @@ fn pocket(hole: &[[f64; 2]], s: f64, block: [f64; 3], depth: f64) -> Vec<Piece> 
             }
         }
         polygon.push(to_square(a));
-        pieces.push(Piece::Prism { polygon, z0: 0.0, z1: depth });
+        pieces.push(Piece::Prism {
+            polygon,
+            z0: 0.0,
+            z1: depth,
+        });
     }
     let (hx, hy) = (block[0] / 2.0, block[1] / 2.0);
     let zc = depth / 2.0;
     let strip_y = (hy - s) / 2.0;
     let strip_x = (hx - s) / 2.0;
     for sign in [1.0, -1.0] {
-        pieces.push(Piece::Box { center: [0.0, sign * (s + strip_y), zc], half: [hx, strip_y, zc] });
-        pieces.push(Piece::Box { center: [sign * (s + strip_x), 0.0, zc], half: [strip_x, s, zc] });
+        pieces.push(Piece::Box {
+            center: [0.0, sign * (s + strip_y), zc],
+            half: [hx, strip_y, zc],
+        });
+        pieces.push(Piece::Box {
+            center: [sign * (s + strip_x), 0.0, zc],
+            half: [strip_x, s, zc],
+        });
     }
-    pieces.push(Piece::Box { center: [0.0, 0.0, -0.001], half: [s, s, 0.001] });
+    pieces.push(Piece::Box {
+        center: [0.0, 0.0, -0.001],
+        half: [s, s, 0.001],
+    });
     pieces
 }
 
@@ -257,19 +279,49 @@ impl SceneSpec {
     /// # Errors
     /// When the task file or its `[geometry]` table is missing or invalid.
     pub fn of_task(task: &Task) -> Result<Self> {
-        let geometry = cad::geometry_of(&task.path)?;
+        let geometry = task.geometry()?.clone();
         let meshes = cad::meshes(&geometry);
-        let file = |role| meshes.iter().find(|m| m.role == role).map(|m| m.file.to_owned()).unwrap_or_default();
+        let file = |role| {
+            meshes
+                .iter()
+                .find(|m| m.role == role)
+                .map(|m| m.file.to_owned())
+                .unwrap_or_default()
+        };
         let reach_of = |b_radius: f64| b_radius + task.omega.size_trans * 2f64.sqrt() + 0.001;
-        let camera = ftmap::vision::task_camera(task)?.map(|camera| CameraSpec { name: "vision".into(), camera });
+        let camera = task.camera.as_ref().map(|setup| CameraSpec {
+            name: "vision".into(),
+            camera: Camera::from(setup),
+        });
         let (face, pieces, top) = match geometry {
-            Geometry::RoundPeg { peg_radius, hole_radius, hole_depth, block, .. } => {
+            Geometry::RoundPeg {
+                peg_radius,
+                hole_radius,
+                hole_depth,
+                block,
+                ..
+            } => {
                 let apothem_circ = hole_radius / (PI / HOLE_SIDES as f64).cos();
                 let hole = polygon(apothem_circ, HOLE_SIDES, PI / HOLE_SIDES as f64);
-                let face = Face { outer: Outline::Circle(peg_radius), inner: None, reach: peg_radius, pitch: 0.0005 };
-                (face, pocket(&hole, apothem_circ + 0.001, block, hole_depth), hole_depth)
+                let face = Face {
+                    outer: Outline::Circle(peg_radius),
+                    inner: None,
+                    reach: peg_radius,
+                    pitch: 0.0005,
+                };
+                (
+                    face,
+                    pocket(&hole, apothem_circ + 0.001, block, hole_depth),
+                    hole_depth,
+                )
             }
-            Geometry::OctagonPeg { peg_across_flats, hole_across_flats, hole_depth, block, .. } => {
+            Geometry::OctagonPeg {
+                peg_across_flats,
+                hole_across_flats,
+                hole_depth,
+                block,
+                ..
+            } => {
                 let octagon = |across: f64| polygon(across / 2.0 / (PI / 8.0).cos(), 8, PI / 8.0);
                 let circ = hole_across_flats / 2.0 / (PI / 8.0).cos();
                 let face = Face {
@@ -278,9 +330,21 @@ impl SceneSpec {
                     reach: peg_across_flats,
                     pitch: 0.0005,
                 };
-                (face, pocket(&octagon(hole_across_flats), circ + 0.001, block, hole_depth), hole_depth)
+                (
+                    face,
+                    pocket(&octagon(hole_across_flats), circ + 0.001, block, hole_depth),
+                    hole_depth,
+                )
             }
-            Geometry::GearOnShaft { root_radius, bore_radius, shaft_radius, shaft_length, base_radius, base_height, .. } => {
+            Geometry::GearOnShaft {
+                root_radius,
+                bore_radius,
+                shaft_radius,
+                shaft_length,
+                base_radius,
+                base_height,
+                ..
+            } => {
                 let face = Face {
                     outer: Outline::Circle(root_radius),
                     inner: Some(Outline::Circle(bore_radius)),
@@ -288,12 +352,27 @@ impl SceneSpec {
                     pitch: 0.0006,
                 };
                 let pieces = vec![
-                    Piece::Cylinder { radius: shaft_radius, z0: 0.0, z1: shaft_length },
-                    Piece::Cylinder { radius: base_radius, z0: -base_height, z1: 0.0 },
+                    Piece::Cylinder {
+                        radius: shaft_radius,
+                        z0: 0.0,
+                        z1: shaft_length,
+                    },
+                    Piece::Cylinder {
+                        radius: base_radius,
+                        z0: -base_height,
+                        z1: 0.0,
+                    },
                 ];
                 (face, pieces, shaft_length)
             }
-            Geometry::BearingHousing { housing, bore_radius, seat_radius, seat_height, plate, .. } => {
+            Geometry::BearingHousing {
+                housing,
+                bore_radius,
+                seat_radius,
+                seat_height,
+                plate,
+                ..
+            } => {
                 let (hx, hy) = (housing[0] / 2.0, housing[1] / 2.0);
                 let face = Face {
                     outer: Outline::Polygon(vec![[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]]),
@@ -302,8 +381,15 @@ impl SceneSpec {
                     pitch: 0.0008,
                 };
                 let pieces = vec![
-                    Piece::Cylinder { radius: seat_radius, z0: 0.0, z1: seat_height },
-                    Piece::Box { center: [0.0, 0.0, -plate[2] / 2.0], half: [plate[0] / 2.0, plate[1] / 2.0, plate[2] / 2.0] },
+                    Piece::Cylinder {
+                        radius: seat_radius,
+                        z0: 0.0,
+                        z1: seat_height,
+                    },
+                    Piece::Box {
+                        center: [0.0, 0.0, -plate[2] / 2.0],
+                        half: [plate[0] / 2.0, plate[1] / 2.0, plate[2] / 2.0],
+                    },
                 ];
                 (face, pieces, seat_height)
             }
@@ -329,15 +415,28 @@ impl SceneSpec {
         let v3 = |v: [f64; 3]| format!("{} {} {}", f(v[0]), f(v[1]), f(v[2]));
         let damping_xy = 2.0 * (SERVO_KP * CARRIAGE_MASS).sqrt();
         let bed = self.face.bed();
-        let _ = writeln!(x, "<!-- Generated by `harness scene --task {}` from models_mjcf/{}/task.toml: do not edit. -->", self.task, self.task);
+        let _ = writeln!(
+            x,
+            "<!-- Generated by `harness scene --task {}` from models_mjcf/{}/task.toml: do not edit. -->",
+            self.task, self.task
+        );
         let _ = writeln!(x, "<mujoco model=\"{}\">", self.task);
-        let _ = writeln!(x, "  <compiler autolimits=\"true\" angle=\"radian\" meshdir=\".\"/>");
-        let _ = writeln!(x, "  <option timestep=\"0.001\" cone=\"elliptic\" gravity=\"0 0 0\"/>");
+        let _ = writeln!(
+            x,
+            "  <compiler autolimits=\"true\" angle=\"radian\" meshdir=\".\"/>"
+        );
+        let _ = writeln!(
+            x,
+            "  <option timestep=\"0.001\" cone=\"elliptic\" gravity=\"0 0 0\"/>"
+        );
         let _ = writeln!(x, "  <size njmax=\"6000\" nconmax=\"2000\"/>");
         if let Some(c) = &self.camera {
             let (w, h) = (c.camera.width, c.camera.height);
             // A strong ambient headlight keeps surfaces seen at grazing angles (silhouettes) bright.
-            let _ = writeln!(x, "  <visual><global offwidth=\"{w}\" offheight=\"{h}\"/><headlight ambient=\"0.45 0.45 0.45\" diffuse=\"0.5 0.5 0.5\"/></visual>");
+            let _ = writeln!(
+                x,
+                "  <visual><global offwidth=\"{w}\" offheight=\"{h}\"/><headlight ambient=\"0.45 0.45 0.45\" diffuse=\"0.5 0.5 0.5\"/></visual>"
+            );
         }
         let _ = writeln!(x, "  <default>");
         let _ = writeln!(
@@ -345,24 +444,44 @@ impl SceneSpec {
             "    <geom condim=\"3\" friction=\"{} 0.005 0.0001\" solref=\"{SOLREF}\" solimp=\"{SOLIMP}\" rgba=\"0.6 0.6 0.65 1\"/>",
             f(self.friction)
         );
-        let _ = writeln!(x, "    <default class=\"visual\"><geom contype=\"0\" conaffinity=\"0\" group=\"1\"/></default>");
+        let _ = writeln!(
+            x,
+            "    <default class=\"visual\"><geom contype=\"0\" conaffinity=\"0\" group=\"1\"/></default>"
+        );
         let _ = writeln!(x, "  </default>");
         let _ = writeln!(x, "  <asset>");
         let _ = writeln!(x, "    <mesh name=\"visual_a\" file=\"{}\"/>", self.mesh_a);
         let _ = writeln!(x, "    <mesh name=\"visual_b\" file=\"{}\"/>", self.mesh_b);
         for (i, p) in self.pieces.iter().enumerate() {
             if let Piece::Prism { polygon, z0, z1 } = p {
-                let verts: Vec<String> =
-                    [z0, z1].iter().flat_map(|z| polygon.iter().map(move |q| format!("{} {} {}", f(q[0]), f(q[1]), f(**z)))).collect();
-                let _ = writeln!(x, "    <mesh name=\"piece{i}\" vertex=\"{}\"/>", verts.join("  "));
+                let verts: Vec<String> = [z0, z1]
+                    .iter()
+                    .flat_map(|z| {
+                        polygon
+                            .iter()
+                            .map(move |q| format!("{} {} {}", f(q[0]), f(q[1]), f(**z)))
+                    })
+                    .collect();
+                let _ = writeln!(
+                    x,
+                    "    <mesh name=\"piece{i}\" vertex=\"{}\"/>",
+                    verts.join("  ")
+                );
             }
         }
         let _ = writeln!(x, "  </asset>");
         let _ = writeln!(x, "  <worldbody>");
         // Camera scenes: no cast shadows (diffuse work-cell lighting; a shadow boundary next
         // to a silhouette would compete with it for the gradient maximum).
-        let shadow = if self.camera.is_some() { " castshadow=\"false\"" } else { "" };
-        let _ = writeln!(x, "    <light pos=\"0 -0.1 0.3\" dir=\"0 0.3 -1\"{shadow}/>");
+        let shadow = if self.camera.is_some() {
+            " castshadow=\"false\""
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            x,
+            "    <light pos=\"0 -0.1 0.3\" dir=\"0 0.3 -1\"{shadow}/>"
+        );
         if let Some(c) = &self.camera {
             let a: Vec<String> = c.camera.xyaxes().iter().map(|&v| f(v)).collect();
             let _ = writeln!(
@@ -378,14 +497,29 @@ impl SceneSpec {
         // With a camera, the camera sees the CAD meshes (opaque) and not the collision pieces
         // (group 3, hidden by default): MuJoCo draws primitives with few slices, which would
         // move a cylinder's silhouette by a pixel.
-        let (alpha_b, hidden) = if self.camera.is_some() { ("1", " group=\"3\"") } else { ("0.5", "") };
-        let _ = writeln!(x, "      <geom name=\"visual_b\" class=\"visual\" type=\"mesh\" mesh=\"visual_b\" rgba=\"0.45 0.5 0.6 {alpha_b}\"/>");
+        let (alpha_b, hidden) = if self.camera.is_some() {
+            ("1", " group=\"3\"")
+        } else {
+            ("0.5", "")
+        };
+        let _ = writeln!(
+            x,
+            "      <geom name=\"visual_b\" class=\"visual\" type=\"mesh\" mesh=\"visual_b\" rgba=\"0.45 0.5 0.6 {alpha_b}\"/>"
+        );
         for (i, p) in self.pieces.iter().enumerate() {
             let _ = match p {
                 Piece::Box { center, half } => {
-                    writeln!(x, "      <geom name=\"piece{i}\" type=\"box\" pos=\"{}\" size=\"{}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>", v3(*center), v3(*half))
+                    writeln!(
+                        x,
+                        "      <geom name=\"piece{i}\" type=\"box\" pos=\"{}\" size=\"{}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>",
+                        v3(*center),
+                        v3(*half)
+                    )
                 }
-                Piece::Prism { .. } => writeln!(x, "      <geom name=\"piece{i}\" type=\"mesh\" mesh=\"piece{i}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>"),
+                Piece::Prism { .. } => writeln!(
+                    x,
+                    "      <geom name=\"piece{i}\" type=\"mesh\" mesh=\"piece{i}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>"
+                ),
                 Piece::Cylinder { radius, z0, z1 } => writeln!(
                     x,
                     "      <geom name=\"piece{i}\" type=\"cylinder\" pos=\"0 0 {}\" size=\"{} {}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>",
@@ -398,13 +532,35 @@ impl SceneSpec {
         let _ = writeln!(x, "    </body>");
         let start = self.top + APPROACH_CLEARANCE;
         let _ = writeln!(x, "    <body name=\"carriage\" pos=\"0 0 0\">");
-        let _ = writeln!(x, "      <joint name=\"x\" type=\"slide\" axis=\"1 0 0\" damping=\"{}\"/>", f(damping_xy));
-        let _ = writeln!(x, "      <joint name=\"y\" type=\"slide\" axis=\"0 1 0\" damping=\"{}\"/>", f(damping_xy));
-        let _ = writeln!(x, "      <joint name=\"z\" type=\"slide\" axis=\"0 0 1\" damping=\"{}\" ref=\"0\"/>", f(APPROACH_DAMPING));
-        let _ = writeln!(x, "      <inertial pos=\"0 0 0.1\" mass=\"{}\" diaginertia=\"0.05 0.05 0.05\"/>", f(CARRIAGE_MASS));
+        let _ = writeln!(
+            x,
+            "      <joint name=\"x\" type=\"slide\" axis=\"1 0 0\" damping=\"{}\"/>",
+            f(damping_xy)
+        );
+        let _ = writeln!(
+            x,
+            "      <joint name=\"y\" type=\"slide\" axis=\"0 1 0\" damping=\"{}\"/>",
+            f(damping_xy)
+        );
+        let _ = writeln!(
+            x,
+            "      <joint name=\"z\" type=\"slide\" axis=\"0 0 1\" damping=\"{}\" ref=\"0\"/>",
+            f(APPROACH_DAMPING)
+        );
+        let _ = writeln!(
+            x,
+            "      <inertial pos=\"0 0 0.1\" mass=\"{}\" diaginertia=\"0.05 0.05 0.05\"/>",
+            f(CARRIAGE_MASS)
+        );
         let _ = writeln!(x, "      <body name=\"part_a\" pos=\"0 0 0\">");
-        let _ = writeln!(x, "        <inertial pos=\"0 0 0.02\" mass=\"0.05\" diaginertia=\"1e-5 1e-5 1e-5\"/>");
-        let _ = writeln!(x, "        <geom name=\"visual_a\" class=\"visual\" type=\"mesh\" mesh=\"visual_a\" rgba=\"0.8 0.6 0.3 1\"/>");
+        let _ = writeln!(
+            x,
+            "        <inertial pos=\"0 0 0.02\" mass=\"0.05\" diaginertia=\"1e-5 1e-5 1e-5\"/>"
+        );
+        let _ = writeln!(
+            x,
+            "        <geom name=\"visual_a\" class=\"visual\" type=\"mesh\" mesh=\"visual_a\" rgba=\"0.8 0.6 0.3 1\"/>"
+        );
         for (i, q) in bed.iter().enumerate() {
             let _ = writeln!(
                 x,
@@ -415,14 +571,31 @@ impl SceneSpec {
                 f(SPHERE_RADIUS)
             );
         }
-        let _ = writeln!(x, "        <site name=\"ft\" pos=\"{}\" size=\"0.002\"/>", v3(self.sensor_origin));
+        let _ = writeln!(
+            x,
+            "        <site name=\"ft\" pos=\"{}\" size=\"0.002\"/>",
+            v3(self.sensor_origin)
+        );
         let _ = writeln!(x, "      </body>");
         let _ = writeln!(x, "    </body>");
         let _ = writeln!(x, "  </worldbody>");
         let _ = writeln!(x, "  <actuator>");
-        let _ = writeln!(x, "    <position name=\"servo_x\" joint=\"x\" kp=\"{}\"/>", f(SERVO_KP));
-        let _ = writeln!(x, "    <position name=\"servo_y\" joint=\"y\" kp=\"{}\"/>", f(SERVO_KP));
-        let _ = writeln!(x, "    <motor name=\"press\" joint=\"z\" ctrlrange=\"{} {}\"/>", f(-4.0 * self.force), f(4.0 * self.force));
+        let _ = writeln!(
+            x,
+            "    <position name=\"servo_x\" joint=\"x\" kp=\"{}\"/>",
+            f(SERVO_KP)
+        );
+        let _ = writeln!(
+            x,
+            "    <position name=\"servo_y\" joint=\"y\" kp=\"{}\"/>",
+            f(SERVO_KP)
+        );
+        let _ = writeln!(
+            x,
+            "    <motor name=\"press\" joint=\"z\" ctrlrange=\"{} {}\"/>",
+            f(-4.0 * self.force),
+            f(4.0 * self.force)
+        );
         let _ = writeln!(x, "  </actuator>");
         let _ = writeln!(x, "  <sensor>");
         let _ = writeln!(x, "    <force name=\"ft_force\" site=\"ft\"/>");
@@ -444,7 +617,10 @@ fn fmt_num(v: f64) -> String {
 
 /// The scene file of a task: `scene.xml` next to its `task.toml`.
 pub fn scene_path(task: &Task) -> PathBuf {
-    task.path.parent().unwrap_or(Path::new(".")).join("scene.xml")
+    task.path
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join("scene.xml")
 }
 
 /// Writes a task's scene file; returns its path.
@@ -472,8 +648,5 @@ pub fn scene_is_current(task: &Task) -> Result<bool> {
 /// # Errors
 /// When the models folder cannot be read.
 pub fn tasks_with_scenes() -> Result<Vec<Task>> {
-    cad::task_dirs_with_geometry(&ftmap::task::models_root())?
-        .iter()
-        .map(|d| Task::load(&d.join("task.toml")).map_err(HarnessError::from))
-        .collect()
+    Ok(Task::all_with_geometry()?)
 }

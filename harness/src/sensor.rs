@@ -27,9 +27,15 @@ pub struct Noise {
 
 impl Noise {
     /// Typical noise of a 6-axis F/T sensor: 0.05 N and 2 mN m.
-    pub const TYPICAL: Self = Self { force: 0.05, torque: 0.002 };
+    pub const TYPICAL: Self = Self {
+        force: 0.05,
+        torque: 0.002,
+    };
     /// No noise.
-    pub const NONE: Self = Self { force: 0.0, torque: 0.0 };
+    pub const NONE: Self = Self {
+        force: 0.0,
+        torque: 0.0,
+    };
 
     /// `w` plus independent Gaussian noise per component.
     pub fn apply(&self, w: [f64; 6], rng: &mut impl Rng) -> [f64; 6] {

@@ -48,7 +48,9 @@ pub struct Sim {
 }
 
 fn id(model: &MjModel, kind: MjtObjBase, what: &'static str, name: &'static str) -> Result<usize> {
-    model.name_to_id(kind, name).ok_or(HarnessError::SceneElement { kind: what, name })
+    model
+        .name_to_id(kind, name)
+        .ok_or(HarnessError::SceneElement { kind: what, name })
 }
 
 impl Sim {
@@ -61,10 +63,16 @@ impl Sim {
         if !scene.is_file() {
             return Err(HarnessError::Scene {
                 path: scene.to_owned(),
-                reason: format!("no such file (generate it: `harness scene --task {}`)", spec.task),
+                reason: format!(
+                    "no such file (generate it: `harness scene --task {}`)",
+                    spec.task
+                ),
             });
         }
-        let model = MjModel::from_xml(scene).map_err(|e| HarnessError::Scene { path: scene.to_owned(), reason: e.to_string() })?;
+        let model = MjModel::from_xml(scene).map_err(|e| HarnessError::Scene {
+            path: scene.to_owned(),
+            reason: e.to_string(),
+        })?;
         let joint = |name| id(&model, MjtObjBase::mjOBJ_JOINT, "joint", name);
         let (jx, jy, jz) = (joint("x")?, joint("y")?, joint("z")?);
         let adr = model.jnt_qposadr();
@@ -78,10 +86,23 @@ impl Sim {
             model.sensor_adr()[sensor("ft_torque")?] as usize,
         ];
         let body_b = id(&model, MjtObjBase::mjOBJ_BODY, "body", "part_b")?;
-        let mocap = usize::try_from(model.body_mocapid()[body_b])
-            .map_err(|_| HarnessError::Scene { path: scene.to_owned(), reason: "body part_b is not a mocap body".into() })?;
+        let mocap =
+            usize::try_from(model.body_mocapid()[body_b]).map_err(|_| HarnessError::Scene {
+                path: scene.to_owned(),
+                reason: "body part_b is not a mocap body".into(),
+            })?;
         let data = MjData::new(Box::new(model));
-        Ok(Self { data, spec, qpos, dof_z, actuators, sensors, mocap, object: [0.0; 2], simulated: 0.0 })
+        Ok(Self {
+            data,
+            spec,
+            qpos,
+            dof_z,
+            actuators,
+            sensors,
+            mocap,
+            object: [0.0; 2],
+            simulated: 0.0,
+        })
     }
 
     /// The scene description this simulation was generated from.
@@ -131,6 +152,11 @@ impl Sim {
         let tcp = [q[self.qpos[0]], q[self.qpos[1]], q[self.qpos[2]]];
         let time = d.time();
         self.simulated += time;
-        Contact { raw, tcp, settled: calm >= SETTLE_STEPS, time }
+        Contact {
+            raw,
+            tcp,
+            settled: calm >= SETTLE_STEPS,
+            time,
+        }
     }
 }

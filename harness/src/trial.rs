@@ -115,14 +115,24 @@ pub fn spiral(step: f64, radius: f64) -> Vec<[f64; 2]> {
 ///
 /// # Errors
 /// When the FMU or rendering fails.
-pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, mut eye: Option<&mut Eye>, cfg: &TrialConfig, offset: [f64; 2], seed: u64) -> Result<TrialResult> {
+pub fn run_trial(
+    sim: &mut Sim,
+    fmu: Option<&Fmu>,
+    mut eye: Option<&mut Eye>,
+    cfg: &TrialConfig,
+    offset: [f64; 2],
+    seed: u64,
+) -> Result<TrialResult> {
     let start = Instant::now();
     let sim_start = sim.simulated();
     sim.set_object(offset);
     let mut rng = StdRng::seed_from_u64(seed);
     let mut estimator = match (cfg.strategy, fmu) {
         (Strategy::Pf, Some(f)) => {
-            let settings = Settings { seed: Some((seed % i32::MAX as u64) as i32), ..cfg.settings.clone() };
+            let settings = Settings {
+                seed: Some((seed % i32::MAX as u64) as i32),
+                ..cfg.settings.clone()
+            };
             Some(f.estimator(&settings)?)
         }
         _ => None,
@@ -159,7 +169,12 @@ pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, mut eye: Option<&mut Eye>, cf
         sim_wall += t0.elapsed().as_secs_f64();
         let wrench = cfg.noise.apply(map_wrench(c.raw), &mut rng);
         if c.tcp[2] < SUCCESS_HEIGHT {
-            steps.push(Step { tcp: c.tcp, wrench, estimate: None, image: false });
+            steps.push(Step {
+                tcp: c.tcp,
+                wrench,
+                estimate: None,
+                image: false,
+            });
             success = true;
             break;
         }
@@ -179,7 +194,12 @@ pub fn run_trial(sim: &mut Sim, fmu: Option<&Fmu>, mut eye: Option<&mut Eye>, cf
             }
             None => None,
         };
-        steps.push(Step { tcp: c.tcp, wrench, estimate, image: image.is_some() });
+        steps.push(Step {
+            tcp: c.tcp,
+            wrench,
+            estimate,
+            image: image.is_some(),
+        });
     }
     let last = steps.last().map_or([0.0; 2], |s| [s.tcp[0], s.tcp[1]]);
     Ok(TrialResult {
@@ -212,7 +232,10 @@ mod tests {
         for k in 0..200 {
             let (r, t) = (0.002 * (k as f64 / 200.0).sqrt(), k as f64 * 2.4);
             let q = [r * t.cos(), r * t.sin()];
-            let near = pts.iter().map(|p| (p[0] - q[0]).hypot(p[1] - q[1])).fold(f64::INFINITY, f64::min);
+            let near = pts
+                .iter()
+                .map(|p| (p[0] - q[0]).hypot(p[1] - q[1]))
+                .fold(f64::INFINITY, f64::min);
             assert!(near < 0.0001, "{q:?} {near}");
         }
     }

@@ -41,14 +41,29 @@ impl Gradient {
         let mut gx = vec![0.0f32; width * height];
         let mut gy = vec![0.0f32; width * height];
         for y in 1..height.saturating_sub(1) {
-            let (a, b, c) = (&g[(y - 1) * width..y * width], &g[y * width..(y + 1) * width], &g[(y + 1) * width..(y + 2) * width]);
-            let (ox, oy) = (&mut gx[y * width..(y + 1) * width], &mut gy[y * width..(y + 1) * width]);
+            let (a, b, c) = (
+                &g[(y - 1) * width..y * width],
+                &g[y * width..(y + 1) * width],
+                &g[(y + 1) * width..(y + 2) * width],
+            );
+            let (ox, oy) = (
+                &mut gx[y * width..(y + 1) * width],
+                &mut gy[y * width..(y + 1) * width],
+            );
             for x in 1..width - 1 {
-                ox[x] = ((a[x + 1] + 2.0 * b[x + 1] + c[x + 1]) - (a[x - 1] + 2.0 * b[x - 1] + c[x - 1])) * 0.125;
-                oy[x] = ((c[x - 1] + 2.0 * c[x] + c[x + 1]) - (a[x - 1] + 2.0 * a[x] + a[x + 1])) * 0.125;
+                ox[x] = ((a[x + 1] + 2.0 * b[x + 1] + c[x + 1])
+                    - (a[x - 1] + 2.0 * b[x - 1] + c[x - 1]))
+                    * 0.125;
+                oy[x] = ((c[x - 1] + 2.0 * c[x] + c[x + 1]) - (a[x - 1] + 2.0 * a[x] + a[x + 1]))
+                    * 0.125;
             }
         }
-        Self { width, height, gx, gy }
+        Self {
+            width,
+            height,
+            gx,
+            gy,
+        }
     }
 
     /// Gradient component along the unit normal `n` at an integer pixel (0 outside).
@@ -78,7 +93,13 @@ pub struct LineParams {
 
 impl Default for LineParams {
     fn default() -> Self {
-        Self { shrink: 0.2, band: 12.0, min_gradient: 8.0, stop_ratio: 0.35, min_support: 0.5 }
+        Self {
+            shrink: 0.2,
+            band: 12.0,
+            min_gradient: 8.0,
+            stop_ratio: 0.35,
+            min_support: 0.5,
+        }
     }
 }
 
@@ -113,7 +134,14 @@ impl Line {
         let (s, c) = angle.to_radians().sin_cos();
         let (cx, cy) = (0.5 * (width as f64 - 1.0), 0.5 * (height as f64 - 1.0));
         let offset = -s * (p0[0] - cx) + c * (p0[1] - cy);
-        Self { angle, offset, p0, p1, points: 0, rms: 0.0 }
+        Self {
+            angle,
+            offset,
+            p0,
+            p1,
+            points: 0,
+            rms: 0.0,
+        }
     }
 
     /// Signed distance of a pixel position from the line, along its normal.
@@ -130,7 +158,10 @@ fn fit(p: &[[f64; 2]]) -> Option<(f64, f64)> {
     if p.len() < 2 {
         return None;
     }
-    let (ms, mt) = (p.iter().map(|q| q[0]).sum::<f64>() / n, p.iter().map(|q| q[1]).sum::<f64>() / n);
+    let (ms, mt) = (
+        p.iter().map(|q| q[0]).sum::<f64>() / n,
+        p.iter().map(|q| q[1]).sum::<f64>() / n,
+    );
     let sss: f64 = p.iter().map(|q| (q[0] - ms).powi(2)).sum();
     if sss <= 0.0 {
         return None;
@@ -155,7 +186,11 @@ pub(crate) fn robust_fit(p: &mut Vec<[f64; 2]>, tol: f64) -> Option<(f64, f64)> 
 /// # Errors
 /// [`VisionError::FeatureNotFound`] when the gradient near the expected line is too weak or
 /// its maxima do not line up.
-pub fn detect_line(grad: &Gradient, expected: [[f64; 2]; 2], p: &LineParams) -> Result<Line, VisionError> {
+pub fn detect_line(
+    grad: &Gradient,
+    expected: [[f64; 2]; 2],
+    p: &LineParams,
+) -> Result<Line, VisionError> {
     let [e0, e1] = expected;
     let steep = (e1[1] - e0[1]).abs() > (e1[0] - e0[0]).abs();
     // (s, t): s the major axis (rows when steep), t across.
@@ -167,18 +202,33 @@ pub fn detect_line(grad: &Gradient, expected: [[f64; 2]; 2], p: &LineParams) -> 
     }
     let len = a1[0] - a0[0];
     if len < 4.0 {
-        return Err(VisionError::FeatureNotFound("expected line shorter than 4 px".into()));
+        return Err(VisionError::FeatureNotFound(
+            "expected line shorter than 4 px".into(),
+        ));
     }
     let slope0 = (a1[1] - a0[1]) / len;
     // Unit normal of the expected line in image coordinates.
     let (du, dv) = (e1[0] - e0[0], e1[1] - e0[1]);
     let norm = du.hypot(dv);
     let n = [(-dv / norm) as f32, (du / norm) as f32];
-    let (smax, tmax) = if steep { (grad.height, grad.width) } else { (grad.width, grad.height) };
-    let at = |s: i64, t: i64| if steep { grad.along(t, s, n) } else { grad.along(s, t, n) };
+    let (smax, tmax) = if steep {
+        (grad.height, grad.width)
+    } else {
+        (grad.width, grad.height)
+    };
+    let at = |s: i64, t: i64| {
+        if steep {
+            grad.along(t, s, n)
+        } else {
+            grad.along(s, t, n)
+        }
+    };
     // Sub-pixel peak across the line at major coordinate s, searching t in [lo, hi].
     let peak = |s: i64, lo: f64, hi: f64| -> Option<(f64, f32)> {
-        let (lo, hi) = (lo.ceil().max(1.0) as i64, hi.floor().min(tmax as f64 - 2.0) as i64);
+        let (lo, hi) = (
+            lo.ceil().max(1.0) as i64,
+            hi.floor().min(tmax as f64 - 2.0) as i64,
+        );
         if s < 1 || s >= smax as i64 - 1 || lo > hi {
             return None;
         }
@@ -191,11 +241,18 @@ pub fn detect_line(grad: &Gradient, expected: [[f64; 2]; 2], p: &LineParams) -> 
         }
         let (gm, gp) = (at(s, bt - 1), at(s, bt + 1));
         let den = gm - 2.0 * best + gp;
-        let dt = if den < 0.0 { (0.5 * (gm - gp) / den).clamp(-0.5, 0.5) } else { 0.0 };
+        let dt = if den < 0.0 {
+            (0.5 * (gm - gp) / den).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
         Some((bt as f64 + f64::from(dt), best))
     };
     // Step 1: move the endpoints toward each other; step 2: maxima per row/column.
-    let (s0, s1) = ((a0[0] + p.shrink * len).ceil() as i64, (a1[0] - p.shrink * len).floor() as i64);
+    let (s0, s1) = (
+        (a0[0] + p.shrink * len).ceil() as i64,
+        (a1[0] - p.shrink * len).floor() as i64,
+    );
     let searched = (s1 - s0 + 1).max(1) as f64;
     let mut pts = Vec::new();
     let mut grads = Vec::new();
@@ -210,11 +267,23 @@ pub fn detect_line(grad: &Gradient, expected: [[f64; 2]; 2], p: &LineParams) -> 
     }
     let not_found = |why: String| Err(VisionError::FeatureNotFound(why));
     if (pts.len() as f64) < p.min_support * searched {
-        return not_found(format!("{} of {} {} have a gradient above {}", pts.len(), searched, if steep { "rows" } else { "columns" }, p.min_gradient));
+        return not_found(format!(
+            "{} of {} {} have a gradient above {}",
+            pts.len(),
+            searched,
+            if steep { "rows" } else { "columns" },
+            p.min_gradient
+        ));
     }
-    let Some((mut a, mut b)) = robust_fit(&mut pts, 1.5) else { return not_found("degenerate edge points".into()) };
+    let Some((mut a, mut b)) = robust_fit(&mut pts, 1.5) else {
+        return not_found("degenerate edge points".into());
+    };
     if (pts.len() as f64) < p.min_support * searched {
-        return not_found(format!("only {} of {} edge points lie on one line", pts.len(), searched));
+        return not_found(format!(
+            "only {} of {} edge points lie on one line",
+            pts.len(),
+            searched
+        ));
     }
     // Step 3: extend along the provisional line while the gradient holds.
     grads.sort_by(f32::total_cmp);
@@ -231,11 +300,27 @@ pub fn detect_line(grad: &Gradient, expected: [[f64; 2]; 2], p: &LineParams) -> 
         }
     }
     // Step 4: final fit on the extended set.
-    let Some(ab) = robust_fit(&mut pts, 1.5) else { return not_found("degenerate edge points".into()) };
+    let Some(ab) = robust_fit(&mut pts, 1.5) else {
+        return not_found("degenerate edge points".into());
+    };
     (a, b) = ab;
-    let (sl, sr) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, r), q| (l.min(q[0]), r.max(q[0])));
-    let rms = (pts.iter().map(|q| (q[1] - a * q[0] - b).powi(2)).sum::<f64>() / pts.len() as f64).sqrt();
-    let mut line = Line::through(xy(sl, a * sl + b), xy(sr, a * sr + b), grad.width, grad.height);
+    let (sl, sr) = pts
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, r), q| {
+            (l.min(q[0]), r.max(q[0]))
+        });
+    let rms = (pts
+        .iter()
+        .map(|q| (q[1] - a * q[0] - b).powi(2))
+        .sum::<f64>()
+        / pts.len() as f64)
+        .sqrt();
+    let mut line = Line::through(
+        xy(sl, a * sl + b),
+        xy(sr, a * sr + b),
+        grad.width,
+        grad.height,
+    );
     line.points = pts.len();
     line.rms = rms;
     Ok(line)
@@ -265,21 +350,45 @@ impl EdgeModel {
 
 /// The silhouette edges of a vision model's parts seen by `cam`: the active part with the
 /// task frame at `tcp`, the passive part with the goal frame at `object` (m).
-pub fn model_edges(model: &VisionModel, cam: &Camera, tcp: [f64; 3], object: [f64; 3]) -> Vec<EdgeModel> {
+pub fn model_edges(
+    model: &VisionModel,
+    cam: &Camera,
+    tcp: [f64; 3],
+    object: [f64; 3],
+) -> Vec<EdgeModel> {
     let mut out = Vec::new();
-    for (part, prism, at) in [("active", &model.active, tcp), ("passive", &model.passive, object)] {
+    for (part, prism, at) in [
+        ("active", &model.active, tcp),
+        ("passive", &model.passive, object),
+    ] {
         if let Some(s) = prism.silhouette(cam, at) {
-            out.push(EdgeModel { name: format!("{part}.left"), ends: s.left });
-            out.push(EdgeModel { name: format!("{part}.right"), ends: s.right });
+            out.push(EdgeModel {
+                name: format!("{part}.left"),
+                ends: s.left,
+            });
+            out.push(EdgeModel {
+                name: format!("{part}.right"),
+                ends: s.right,
+            });
         }
     }
     out
 }
 
-/// The vision model of a task seen by `camera`; `None` when the task has no features to
-/// compare (only the bearing housing has them).
-pub fn task_model(task: &ftmap::Task, camera: Camera) -> Option<VisionModel> {
-    VisionModel::of_geometry(&ftmap::cad::geometry_of(&task.path).ok()?, camera)
+/// The vision model of a task (its `[camera]` and the features of its `[geometry]`) seen by
+/// `camera` (MuJoCo's, as rendered) instead of the designed one.
+///
+/// # Errors
+/// When the task has no camera, or parts without vision features.
+pub fn task_model(task: &ftmap::Task, camera: Camera) -> crate::error::Result<VisionModel> {
+    let model = VisionModel::of_task(task)?.ok_or_else(|| crate::error::HarnessError::Invalid {
+        what: "vision",
+        reason: format!(
+            "task {} has no camera (a [camera] table in its task.toml; bearing_housing has one)",
+            task.name
+        ),
+    })?;
+    Ok(VisionModel { camera, ..model })
 }
 
 /// One edge: where the model expects it, where it truly is, what was found.
@@ -300,7 +409,11 @@ pub struct EdgeResult {
 /// Column (u) of a line at image row `v`.
 pub fn u_at(l: &Line, v: f64) -> f64 {
     let dv = l.p1[1] - l.p0[1];
-    if dv.abs() < 1e-12 { l.p0[0] } else { l.p0[0] + (v - l.p0[1]) * (l.p1[0] - l.p0[0]) / dv }
+    if dv.abs() < 1e-12 {
+        l.p0[0]
+    } else {
+        l.p0[0] + (v - l.p0[1]) * (l.p1[0] - l.p0[0]) / dv
+    }
 }
 
 /// Horizontal image distance (px) from line `a` to line `b` at image row `v`.
@@ -323,9 +436,17 @@ impl Features {
     pub fn of(results: &[EdgeResult], cam: &Camera) -> Option<Self> {
         let v = cam.reference_row();
         let found = |name: &str| results.iter().find(|r| r.name == name)?.found.as_ref().ok();
-        let side = |s: &str| Some((found(&format!("active.{s}"))?, found(&format!("passive.{s}"))?));
+        let side = |s: &str| {
+            Some((
+                found(&format!("active.{s}"))?,
+                found(&format!("passive.{s}"))?,
+            ))
+        };
         let ((al, pl), (ar, pr)) = (side("left")?, side("right")?);
-        Some(Self { distances: [u_distance(al, pl, v), u_distance(ar, pr, v)], passive: [u_at(pl, v), u_at(pr, v)] })
+        Some(Self {
+            distances: [u_distance(al, pl, v), u_distance(ar, pr, v)],
+            passive: [u_at(pl, v), u_at(pr, v)],
+        })
     }
 }
 
@@ -344,10 +465,29 @@ impl Detector {
     ///
     /// # Errors
     /// [`VisionError::FeatureNotFound`] as the detector decides.
-    pub fn detect(self, grad: &Gradient, ends: [[f64; 2]; 2], band: f64) -> Result<Line, VisionError> {
+    pub fn detect(
+        self,
+        grad: &Gradient,
+        ends: [[f64; 2]; 2],
+        band: f64,
+    ) -> Result<Line, VisionError> {
         match self {
-            Self::Gradient => detect_line(grad, ends, &LineParams { band, ..LineParams::default() }),
-            Self::Hough => crate::hough::detect_line_hough(grad, ends, &crate::hough::HoughParams { band, ..crate::hough::HoughParams::default() }),
+            Self::Gradient => detect_line(
+                grad,
+                ends,
+                &LineParams {
+                    band,
+                    ..LineParams::default()
+                },
+            ),
+            Self::Hough => crate::hough::detect_line_hough(
+                grad,
+                ends,
+                &crate::hough::HoughParams {
+                    band,
+                    ..crate::hough::HoughParams::default()
+                },
+            ),
         }
     }
 }
@@ -356,17 +496,36 @@ impl Detector {
 /// known to the robot; the passive part is expected at the nominal goal and may lie anywhere
 /// within `size_trans` (m) in x and y, so its search band covers that; `object` is the true
 /// pose, used only for the ground truth lines.
-pub fn detect_edges(gray: &[f32], cam: &Camera, model: &VisionModel, tcp: [f64; 3], object: [f64; 3], size_trans: f64, detector: Detector) -> Vec<EdgeResult> {
+pub fn detect_edges(
+    gray: &[f32],
+    cam: &Camera,
+    model: &VisionModel,
+    tcp: [f64; 3],
+    object: [f64; 3],
+    size_trans: f64,
+    detector: Detector,
+) -> Vec<EdgeResult> {
     let grad = Gradient::sobel(cam.width, cam.height, gray);
     detect_edges_in(&grad, cam, model, tcp, object, size_trans, detector)
 }
 
 /// As [`detect_edges`], on a gradient image.
-pub fn detect_edges_in(grad: &Gradient, cam: &Camera, model: &VisionModel, tcp: [f64; 3], object: [f64; 3], size_trans: f64, detector: Detector) -> Vec<EdgeResult> {
+pub fn detect_edges_in(
+    grad: &Gradient,
+    cam: &Camera,
+    model: &VisionModel,
+    tcp: [f64; 3],
+    object: [f64; 3],
+    size_trans: f64,
+    detector: Detector,
+) -> Vec<EdgeResult> {
     let expected = model_edges(model, cam, tcp, [0.0; 3]);
     let truth = model_edges(model, cam, tcp, object);
     let s = size_trans;
-    let shifted: Vec<Vec<EdgeModel>> = [[s, s, 0.0], [s, -s, 0.0], [-s, s, 0.0], [-s, -s, 0.0]].iter().map(|o| model_edges(model, cam, tcp, *o)).collect();
+    let shifted: Vec<Vec<EdgeModel>> = [[s, s, 0.0], [s, -s, 0.0], [-s, s, 0.0], [-s, -s, 0.0]]
+        .iter()
+        .map(|o| model_edges(model, cam, tcp, *o))
+        .collect();
     expected
         .iter()
         .zip(&truth)
@@ -377,13 +536,23 @@ pub fn detect_edges_in(grad: &Gradient, cam: &Camera, model: &VisionModel, tcp: 
                 let far = shifted
                     .iter()
                     .filter_map(|v| v.iter().find(|m| m.name == e.name)?.line(cam))
-                    .map(|l| ends.iter().map(|p| l.distance(*p, cam.width, cam.height).abs()).fold(0.0, f64::max))
+                    .map(|l| {
+                        ends.iter()
+                            .map(|p| l.distance(*p, cam.width, cam.height).abs())
+                            .fold(0.0, f64::max)
+                    })
                     .fold(0.0, f64::max);
                 far + 6.0
             } else {
                 LineParams::default().band
             };
-            Some(EdgeResult { name: e.name.clone(), expected: el, truth: tl, band, found: detector.detect(grad, ends, band) })
+            Some(EdgeResult {
+                name: e.name.clone(),
+                expected: el,
+                truth: tl,
+                band,
+                found: detector.detect(grad, ends, band),
+            })
         })
         .collect()
 }
@@ -414,8 +583,13 @@ pub(crate) mod tests {
             for x in 0..w {
                 let mut cov = 0.0;
                 for k in 0..16 {
-                    let (sx, sy) = (x as f64 - 0.375 + 0.25 * f64::from(k % 4), y as f64 - 0.375 + 0.25 * f64::from(k / 4));
-                    if -s * (sx - p[0]) + c * (sy - p[1]) > 0.0 && keep(c * (sx - p[0]) + s * (sy - p[1])) {
+                    let (sx, sy) = (
+                        x as f64 - 0.375 + 0.25 * f64::from(k % 4),
+                        y as f64 - 0.375 + 0.25 * f64::from(k / 4),
+                    );
+                    if -s * (sx - p[0]) + c * (sy - p[1]) > 0.0
+                        && keep(c * (sx - p[0]) + s * (sy - p[1]))
+                    {
                         cov += 1.0 / 16.0;
                     }
                 }
@@ -427,15 +601,31 @@ pub(crate) mod tests {
 
     #[test]
     fn synthetic_edges_are_found_to_a_fraction_of_a_pixel() {
-        for (angle, p, seed) in [(80.0, [300.3, 240.0], 1), (-86.5, [200.7, 200.0], 2), (7.0, [320.0, 250.4], 3), (-30.0, [320.0, 240.2], 4)] {
+        for (angle, p, seed) in [
+            (80.0, [300.3, 240.0], 1),
+            (-86.5, [200.7, 200.0], 2),
+            (7.0, [320.0, 250.4], 3),
+            (-30.0, [320.0, 240.2], 4),
+        ] {
             let mut g = step(angle, p, |_| true);
             add_noise(&mut g, 5.0, seed);
             let grad = Gradient::sobel(640, 480, &g);
-            let truth = Line::through(p, [p[0] + 100.0 * f64::to_radians(angle).cos(), p[1] + 100.0 * f64::to_radians(angle).sin()], 640, 480);
+            let truth = Line::through(
+                p,
+                [
+                    p[0] + 100.0 * f64::to_radians(angle).cos(),
+                    p[1] + 100.0 * f64::to_radians(angle).sin(),
+                ],
+                640,
+                480,
+            );
             // Expected: 4 px off across the line and 1 degree off.
             let (s, c) = (angle + 1.0).to_radians().sin_cos();
             let q = [p[0] - 4.0 * s, p[1] + 4.0 * c];
-            let e = [[q[0] - 120.0 * c, q[1] - 120.0 * s], [q[0] + 120.0 * c, q[1] + 120.0 * s]];
+            let e = [
+                [q[0] - 120.0 * c, q[1] - 120.0 * s],
+                [q[0] + 120.0 * c, q[1] + 120.0 * s],
+            ];
             let l = detect_line(&grad, e, &LineParams::default()).expect("edge found");
             let mut da = l.angle - truth.angle;
             if da > 90.0 {
@@ -444,9 +634,15 @@ pub(crate) mod tests {
                 da += 180.0;
             }
             assert!(da.abs() < 0.2, "angle {angle}: error {da}");
-            assert!((l.distance(p, 640, 480)).abs() < 0.5, "angle {angle}: {l:?}");
+            assert!(
+                (l.distance(p, 640, 480)).abs() < 0.5,
+                "angle {angle}: {l:?}"
+            );
             // The extension reaches beyond the shrunken expected span.
-            assert!((l.p1[0] - l.p0[0]).hypot(l.p1[1] - l.p0[1]) > 0.6 * 240.0, "{l:?}");
+            assert!(
+                (l.p1[0] - l.p0[0]).hypot(l.p1[1] - l.p0[1]) > 0.6 * 240.0,
+                "{l:?}"
+            );
         }
     }
 
@@ -455,7 +651,14 @@ pub(crate) mod tests {
         let mut g = vec![100.0f32; 640 * 480];
         add_noise(&mut g, 5.0, 9);
         let grad = Gradient::sobel(640, 480, &g);
-        let r = detect_line(&grad, [[300.0, 100.0], [310.0, 380.0]], &LineParams { band: 40.0, ..LineParams::default() });
+        let r = detect_line(
+            &grad,
+            [[300.0, 100.0], [310.0, 380.0]],
+            &LineParams {
+                band: 40.0,
+                ..LineParams::default()
+            },
+        );
         assert!(matches!(r, Err(VisionError::FeatureNotFound(_))), "{r:?}");
     }
 }

@@ -23,7 +23,13 @@ fn a_5_trial_peg_in_hole_campaign_through_the_fmu_succeeds_within_10_contacts() 
     let offsets = random_offsets(5, task.omega.size_trans, 7);
     let results = run_campaign(&mut sim, Some(&fmu), None, &cfg, &offsets, 7).unwrap();
     for r in &results {
-        assert!(r.success && r.contacts <= 10, "offset {:?}: {} contacts, success {}", r.offset, r.contacts, r.success);
+        assert!(
+            r.success && r.contacts <= 10,
+            "offset {:?}: {} contacts, success {}",
+            r.offset,
+            r.contacts,
+            r.success
+        );
         assert!(r.final_error < 0.0002, "{r:?}");
     }
 }

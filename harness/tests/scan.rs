@@ -21,7 +21,7 @@ fn a_scan_of_a_small_grid_agrees_in_sign_with_the_computed_map() {
     let dir = std::env::temp_dir().join(format!("harness-scan-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("measured.ftmap");
-    ftmap::format::save(&measured, &path).unwrap();
-    assert_eq!(ftmap::format::load(&path).unwrap(), measured);
+    ftmap::map::format::save(&measured, &path).unwrap();
+    assert_eq!(ftmap::map::format::load(&path).unwrap(), measured);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,6 +1,9 @@
 //! Every generated scene loads in MuJoCo 3.17.0 and in Debian's MuJoCo 2.2.2, and a part A
 //! resting off-centre on part B gives a torque along z x offset in both.
 
+#[path = "../../tests/prerequisite.rs"]
+mod prerequisite;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -30,15 +33,44 @@ fn every_scene_loads_and_its_rim_wrench_agrees_with_the_computed_map() {
         let spec = SceneSpec::of_task(task).unwrap();
         let (raw, z) = rim_contact(task);
         let w = map_wrench(raw);
-        let map = generate(task, &ftmap::cpu::CpuBackend, &GenerateOptions::default(), &|_| {}).unwrap();
+        let map = generate(
+            task,
+            &ftmap::depth::cpu::CpuBackend,
+            &GenerateOptions::default(),
+            &|_| {},
+        )
+        .unwrap();
         let m = map.interpolate(&OFFSET).unwrap();
-        assert!((w[2] - task.contact.force).abs() < 0.5, "{}: {w:?}", task.name);
+        assert!(
+            (w[2] - task.contact.force).abs() < 0.5,
+            "{}: {w:?}",
+            task.name
+        );
         // Offset along +x: the torque lies along y (+y where B has the hole, -y where A
         // has the bore), as in the map, within 15 % in magnitude.
-        assert!(w[4].abs() > 0.02 && w[3].abs() < 0.05 * w[4].abs(), "{}: {w:?}", task.name);
-        assert_eq!(w[4].signum(), m[4].signum(), "{}: sim {w:?} map {m:?}", task.name);
-        assert!((w[4] - m[4]).abs() < 0.15 * m[4].abs(), "{}: sim {w:?} map {m:?}", task.name);
-        assert!((z - spec.top).abs() < 1e-4 && (z - m[6]).abs() < 1e-4, "{}: rests at {z}, top {}, map depth {}", task.name, spec.top, m[6]);
+        assert!(
+            w[4].abs() > 0.02 && w[3].abs() < 0.05 * w[4].abs(),
+            "{}: {w:?}",
+            task.name
+        );
+        assert_eq!(
+            w[4].signum(),
+            m[4].signum(),
+            "{}: sim {w:?} map {m:?}",
+            task.name
+        );
+        assert!(
+            (w[4] - m[4]).abs() < 0.15 * m[4].abs(),
+            "{}: sim {w:?} map {m:?}",
+            task.name
+        );
+        assert!(
+            (z - spec.top).abs() < 1e-4 && (z - m[6]).abs() < 1e-4,
+            "{}: rests at {z}, top {}, map depth {}",
+            task.name,
+            spec.top,
+            m[6]
+        );
     }
 }
 
@@ -50,7 +82,11 @@ fn build_loader(dir: &Path) -> Option<PathBuf> {
         .arg(&src)
         .args(["-o"])
         .arg(&exe)
-        .args(["-L/usr/lib/x86_64-linux-gnu", "-l:libmujoco.so.2.2.2", "-lm"])
+        .args([
+            "-L/usr/lib/x86_64-linux-gnu",
+            "-l:libmujoco.so.2.2.2",
+            "-lm",
+        ])
         .output()
         .ok()?;
     if !out.status.success() {
@@ -63,7 +99,10 @@ fn build_loader(dir: &Path) -> Option<PathBuf> {
 #[test]
 fn every_scene_loads_in_mujoco_2_2_2_with_the_same_torque_sign() {
     if !Path::new("/usr/include/mujoco/mujoco.h").is_file() {
-        eprintln!("skipped: MuJoCo 2.2.2 headers missing (scripts/setup.sh installs libmujoco-dev)");
+        prerequisite::missing(
+            "MuJoCo 2.2.2 headers missing",
+            "scripts/setup.sh installs libmujoco-dev",
+        );
         return;
     }
     let dir = std::env::temp_dir().join(format!("harness-mj22-{}", std::process::id()));
@@ -73,19 +112,49 @@ fn every_scene_loads_in_mujoco_2_2_2_with_the_same_torque_sign() {
         let spec = SceneSpec::of_task(&task).unwrap();
         let out = Command::new(&exe)
             .arg(scene_path(&task))
-            .args([OFFSET[0], OFFSET[1], spec.top + APPROACH_CLEARANCE, spec.force].map(|v| v.to_string()))
+            .args(
+                [
+                    OFFSET[0],
+                    OFFSET[1],
+                    spec.top + APPROACH_CLEARANCE,
+                    spec.force,
+                ]
+                .map(|v| v.to_string()),
+            )
             .env_remove("LD_LIBRARY_PATH")
             .output()
             .unwrap();
         let text = String::from_utf8_lossy(&out.stdout);
-        assert!(out.status.success(), "{}: {}", task.name, String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}: {}",
+            task.name,
+            String::from_utf8_lossy(&out.stderr)
+        );
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], "version 222", "{}", task.name);
-        let raw22: Vec<f64> = lines[1].split_whitespace().map(|v| v.parse().unwrap()).collect();
+        let raw22: Vec<f64> = lines[1]
+            .split_whitespace()
+            .map(|v| v.parse().unwrap())
+            .collect();
         let (raw, _) = rim_contact(&task);
-        assert!(raw22[4].abs() > 0.02, "{}: 2.2.2 gives {raw22:?}", task.name);
-        assert_eq!(raw22[4].signum(), raw[4].signum(), "{}: 2.2.2 {raw22:?} vs 3.17 {raw:?}", task.name);
-        assert_eq!(raw22[2].signum(), raw[2].signum(), "{}: 2.2.2 {raw22:?} vs 3.17 {raw:?}", task.name);
+        assert!(
+            raw22[4].abs() > 0.02,
+            "{}: 2.2.2 gives {raw22:?}",
+            task.name
+        );
+        assert_eq!(
+            raw22[4].signum(),
+            raw[4].signum(),
+            "{}: 2.2.2 {raw22:?} vs 3.17 {raw:?}",
+            task.name
+        );
+        assert_eq!(
+            raw22[2].signum(),
+            raw[2].signum(),
+            "{}: 2.2.2 {raw22:?} vs 3.17 {raw:?}",
+            task.name
+        );
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

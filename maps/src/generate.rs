@@ -10,12 +10,13 @@ use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vecto
 use rayon::prelude::*;
 
 use crate::depth::{DepthBackend, PixelWindow, RenderJob, Shift, Surface, View};
-use crate::dof::{Axis, Pose};
 use crate::error::{MapError, Result};
-use crate::grid::{Grid, MAX_AXES};
-use crate::map::{FtMap, MapMeta, NCH, SourceMesh, WrenchModel};
+use crate::map::{FtMap, MapMeta, NCH, SourceMesh};
 use crate::mesh::Mesh;
 use crate::task::Task;
+use crate::task::dof::{Axis, Pose};
+use crate::task::omega::{Grid, MAX_AXES};
+use crate::wrench::WrenchModel;
 use crate::wrench::WrenchSetup;
 
 /// Choices of a map computation.
@@ -133,7 +134,7 @@ pub fn cached(task: &Task, dir: &Path) -> Result<(PathBuf, bool)> {
         .map(|b| format!("{b:02x}"))
         .collect();
     let path = dir.join(format!("{}-{hash}.ftmap", task.name));
-    if path.is_file() && crate::format::load(&path).is_ok() {
+    if path.is_file() && crate::map::format::load(&path).is_ok() {
         return Ok((path, false));
     }
     std::fs::create_dir_all(dir).map_err(|source| MapError::Io {
@@ -142,11 +143,11 @@ pub fn cached(task: &Task, dir: &Path) -> Result<(PathBuf, bool)> {
     })?;
     let map = generate(
         task,
-        &crate::cpu::CpuBackend,
+        &crate::depth::cpu::CpuBackend,
         &GenerateOptions::default(),
         &|_| {},
     )?;
-    crate::format::save(&map, &path)?;
+    crate::map::format::save(&map, &path)?;
     Ok((path, true))
 }
 

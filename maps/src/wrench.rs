@@ -4,8 +4,22 @@
 
 use nalgebra::{Point3, Vector2, Vector3};
 
+use serde::{Deserialize, Serialize};
+
 use crate::depth::{ContactSummary, View};
-use crate::map::WrenchModel;
+
+/// How the wrench of a contact configuration was obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WrenchModel {
+    /// The paper's: force from contact normals and friction (Eq. 2), torque 0 when the
+    /// sensor axis meets the contact hull, else PK x F.
+    Paper,
+    /// Pressure spread evenly over the contact area: torque = (centroid - sensor) x F.
+    Centroid,
+    /// Scanned by contact motions in a (simulated) work cell.
+    Measured,
+}
 
 /// Everything about a configuration the wrench models need besides its contacts.
 #[derive(Debug, Clone, Copy)]

@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 
-use ftmap::cpu::CpuBackend;
+use ftmap::depth::cpu::CpuBackend;
 use ftmap::generate::{GenerateOptions, generate, generate_with};
 use ftmap::mesh::Mesh;
 use ftmap::{FtMap, Task, WrenchModel};

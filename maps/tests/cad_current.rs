@@ -4,10 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use ftmap::Task;
-use ftmap::cad::{self, Role};
 use ftmap::mesh::Mesh;
+use ftmap::task::cad::{self, Role};
 
-const REGENERATE: &str = "cargo run --release -p ftmap -- cad (or target/release/ftmap cad)";
+const REGENERATE: &str = "cargo run --release -p ftmap-cli -- cad (or target/release/ftmap cad)";
 
 fn models() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../models_mjcf")
@@ -15,22 +15,19 @@ fn models() -> PathBuf {
 
 #[test]
 fn committed_meshes_are_current() {
-    let dirs = cad::task_dirs_with_geometry(&models()).expect("models_mjcf is readable");
-    let names: Vec<String> = dirs
-        .iter()
-        .filter_map(|d| d.file_name())
-        .map(|n| n.to_string_lossy().into_owned())
-        .collect();
+    let tasks = Task::all_with_geometry().expect("models_mjcf is readable");
+    let names: Vec<&str> = tasks.iter().map(|t| t.name.as_str()).collect();
     for task in ["bearing_housing", "gear", "octagon", "peg_in_hole"] {
         assert!(
-            names.iter().any(|n| n == task),
+            names.contains(&task),
             "task {task} has no [geometry] table (found {names:?})"
         );
     }
     let mut stale = Vec::new();
-    for dir in &dirs {
-        let geometry = cad::geometry_of(&dir.join("task.toml")).expect("a valid [geometry] table");
-        for mesh in cad::meshes(&geometry) {
+    for task in &tasks {
+        let dir = task.path.parent().expect("a task file lies in a folder");
+        let geometry = task.geometry.as_ref().expect("a [geometry] table");
+        for mesh in cad::meshes(geometry) {
             let path = dir.join(mesh.file);
             let want = cad::stl_bytes(&mesh.triangles);
             match std::fs::read(&path) {
@@ -54,10 +51,10 @@ fn committed_meshes_are_current() {
 
 #[test]
 fn task_files_name_the_generated_meshes() {
-    for dir in cad::task_dirs_with_geometry(&models()).expect("models_mjcf is readable") {
-        let task = Task::load(&dir.join("task.toml")).expect("the task file loads");
-        let geometry = cad::geometry_of(&task.path).expect("a valid [geometry] table");
-        for mesh in cad::meshes(&geometry) {
+    for task in Task::all_with_geometry().expect("models_mjcf is readable") {
+        let dir = task.path.parent().expect("a task file lies in a folder");
+        let geometry = task.geometry.as_ref().expect("a [geometry] table");
+        for mesh in cad::meshes(geometry) {
             let named = match mesh.role {
                 Role::A => &task.part_a.mesh,
                 Role::B => &task.part_b.mesh,

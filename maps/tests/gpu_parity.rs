@@ -1,15 +1,18 @@
 //! Parity of the wgpu depth backend with the CPU reference: depth images of a peg, a
 //! blind-hole block and a box (straight and tilted, top and bottom surfaces), and the
-//! contact summaries of the peg over the block for 10,201 shifts. Skips with a message
-//! when no Vulkan adapter is present.
+//! contact summaries of the peg over the block for 10,201 shifts. Without a Vulkan
+//! adapter it is skipped with a message, and fails under `CI=true`.
 #![cfg(feature = "gpu")]
+
+#[path = "../../tests/prerequisite.rs"]
+mod prerequisite;
 
 use std::f64::consts::TAU;
 use std::time::Instant;
 
-use ftmap::cpu::CpuBackend;
+use ftmap::depth::cpu::CpuBackend;
+use ftmap::depth::gpu::GpuBackend;
 use ftmap::depth::{DepthBackend, DepthImage, PixelWindow, RenderJob, Shift, Surface, View};
-use ftmap::gpu::GpuBackend;
 use ftmap::mesh::Mesh;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
@@ -156,7 +159,10 @@ fn gpu() -> Option<GpuBackend> {
             Some(g)
         }
         Err(e) => {
-            eprintln!("skipping GPU parity: {e}");
+            prerequisite::missing(
+                &format!("no Vulkan adapter for GPU parity: {e}"),
+                "scripts/setup.sh installs Mesa's lavapipe",
+            );
             None
         }
     }

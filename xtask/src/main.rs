@@ -240,23 +240,19 @@ print(result[-1])
 
 /// The filter benchmark: Rust (release) and NumPy on the same sizes, and the ratio.
 fn bench(args: &[String]) -> Result<()> {
-    run(cargo().args([
-        "build",
-        "--release",
-        "-p",
-        "ftfusion",
-        "--bin",
-        "ftfusion-bench",
-    ]))?;
-    let out = Command::new(root().join("target/release/ftfusion-bench"))
+    let bench = ["bench", "-p", "ftfusion", "--bench", "filter"];
+    run(cargo().args(bench).arg("--no-run"))?;
+    let out = cargo()
+        .args(bench)
+        .arg("--")
         .args(args)
         .current_dir(root())
         .output()
-        .context("running ftfusion-bench")?;
+        .context("running the ftfusion filter benchmark")?;
     print!("{}", String::from_utf8_lossy(&out.stdout));
     if !out.status.success() {
         bail!(
-            "ftfusion-bench failed: {}",
+            "the ftfusion filter benchmark failed: {}",
             String::from_utf8_lossy(&out.stderr)
         );
     }

@@ -146,7 +146,7 @@ impl Lookup {
         let mut out = [0.0; LANES];
         let n = u.len().min(self.ndim());
         let mut base = 0;
-        let mut frac = [0.0f32; ftmap::grid::MAX_AXES];
+        let mut frac = [0.0f32; ftmap::task::omega::MAX_AXES];
         for (k, a) in self.axes.iter().enumerate().take(n) {
             let t = u[k].clamp(0.0, a.top());
             let i = (t as usize).min(a.count.saturating_sub(2));

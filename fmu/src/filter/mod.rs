@@ -26,7 +26,7 @@ use rand_xoshiro::rand_core::{Rng, SeedableRng};
 pub use estimate::Estimate;
 pub use lookup::{Interpolation, LANES, Lookup, MapAxis};
 pub use state::{Reader, Writer};
-pub use vision::{Prepared, VisionMeasurement, VisionSense};
+pub use vision::{Prepared, VisionMeasurement, VisionMethod, VisionSense};
 
 use crate::error::{FusionError, Result};
 

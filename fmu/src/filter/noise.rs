@@ -16,7 +16,9 @@ const SIZE: usize = 1 << BITS;
 /// The standard-normal quantiles at (i + 0.5) / SIZE.
 fn table() -> &'static [f32; SIZE] {
     static TABLE: OnceLock<[f32; SIZE]> = OnceLock::new();
-    TABLE.get_or_init(|| std::array::from_fn(|i| inverse_normal_cdf((i as f64 + 0.5) / SIZE as f64) as f32))
+    TABLE.get_or_init(|| {
+        std::array::from_fn(|i| inverse_normal_cdf((i as f64 + 0.5) / SIZE as f64) as f32)
+    })
 }
 
 /// Adds `scale` times a standard-normal draw to every value and clamps it into [0, top].
@@ -36,13 +38,39 @@ pub fn jitter(rng: &mut Xoshiro256PlusPlus, values: &mut [f32], scale: f32, top:
 /// The standard normal quantile function (Acklam's rational approximation, relative
 /// error below 1.2e-9).
 pub fn inverse_normal_cdf(p: f64) -> f64 {
-    const A: [f64; 6] = [-3.969683028665376e1, 2.209460984245205e2, -2.759285104469687e2, 1.38357751867269e2, -3.066479806614716e1, 2.506628277459239];
-    const B: [f64; 5] = [-5.447609879822406e1, 1.615858368580409e2, -1.556989798598866e2, 6.680131188771972e1, -1.328068155288572e1];
-    const C: [f64; 6] = [-7.784894002430293e-3, -3.223964580411365e-1, -2.400758277161838, -2.549732539343734, 4.374664141464968, 2.938163982698783];
-    const D: [f64; 4] = [7.784695709041462e-3, 3.224671290700398e-1, 2.445134137142996, 3.754408661907416];
+    const A: [f64; 6] = [
+        -3.969683028665376e1,
+        2.209460984245205e2,
+        -2.759285104469687e2,
+        1.38357751867269e2,
+        -3.066479806614716e1,
+        2.506628277459239,
+    ];
+    const B: [f64; 5] = [
+        -5.447609879822406e1,
+        1.615858368580409e2,
+        -1.556989798598866e2,
+        6.680131188771972e1,
+        -1.328068155288572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784894002430293e-3,
+        -3.223964580411365e-1,
+        -2.400758277161838,
+        -2.549732539343734,
+        4.374664141464968,
+        2.938163982698783,
+    ];
+    const D: [f64; 4] = [
+        7.784695709041462e-3,
+        3.224671290700398e-1,
+        2.445134137142996,
+        3.754408661907416,
+    ];
     const LOW: f64 = 0.02425;
     let tail = |q: f64| {
-        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5]) / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
     };
     if p < LOW {
         tail((-2.0 * p.ln()).sqrt())
@@ -64,8 +92,18 @@ mod tests {
     #[test]
     fn quantiles_match_known_values() {
         // Standard normal quantiles from tables.
-        for (p, z) in [(0.5, 0.0), (0.975, 1.959963984540054), (0.8413447460685429, 1.0), (0.001, -3.090232306167813), (0.01, -2.326347874040841)] {
-            assert!((inverse_normal_cdf(p) - z).abs() < 1e-8, "p {p}: {} vs {z}", inverse_normal_cdf(p));
+        for (p, z) in [
+            (0.5, 0.0),
+            (0.975, 1.959963984540054),
+            (0.8413447460685429, 1.0),
+            (0.001, -3.090232306167813),
+            (0.01, -2.326347874040841),
+        ] {
+            assert!(
+                (inverse_normal_cdf(p) - z).abs() < 1e-8,
+                "p {p}: {} vs {z}",
+                inverse_normal_cdf(p)
+            );
         }
     }
 
@@ -76,11 +114,18 @@ mod tests {
         let mut v = vec![50.0f32; n];
         jitter(&mut rng, &mut v, 0.5, 100.0);
         let mean = v.iter().map(|&x| f64::from(x)).sum::<f64>() / n as f64;
-        let var = v.iter().map(|&x| (f64::from(x) - mean).powi(2)).sum::<f64>() / n as f64;
+        let var = v
+            .iter()
+            .map(|&x| (f64::from(x) - mean).powi(2))
+            .sum::<f64>()
+            / n as f64;
         assert!((mean - 50.0).abs() < 0.01, "mean {mean}");
         assert!((var.sqrt() - 0.5).abs() < 0.01, "std {}", var.sqrt());
         let mut c = vec![0.1f32; 1000];
         jitter(&mut rng, &mut c, 5.0, 0.2);
-        assert!(c.iter().all(|&x| (0.0..=0.2).contains(&x)), "clamped into [0, top]");
+        assert!(
+            c.iter().all(|&x| (0.0..=0.2).contains(&x)),
+            "clamped into [0, top]"
+        );
     }
 }

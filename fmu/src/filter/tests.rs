@@ -9,7 +9,7 @@ use rand_xoshiro::rand_core::SeedableRng;
 
 use super::state::{Reader, Writer};
 use super::*;
-use crate::synthetic::{field, peg_map};
+use ftfusion_testkit::{field, peg_map};
 
 const STEP: f64 = 2.5e-4;
 
@@ -344,17 +344,16 @@ fn image(
 /// Grid step of the vision tests' map: the bearing housing's 0.1 mm.
 const FINE: f64 = 1e-4;
 
-
-fn vision_filter(seed: u64, method: ftmap::vision::VisionMethod) -> Filter {
+fn vision_filter(seed: u64, method: crate::filter::VisionMethod) -> Filter {
     let f = filter_at(seed, FINE);
-    let sense = VisionSense::new(crate::synthetic::bearing_vision(), method, 0.5, f.lookup());
+    let sense = VisionSense::new(ftfusion_testkit::bearing_vision(), method, 0.5, f.lookup());
     f.with_vision(sense)
 }
 
 #[test]
 fn vision_pins_down_y_after_one_measurement() {
-    use ftmap::vision::VisionMethod;
-    let model = crate::synthetic::bearing_vision();
+    use crate::filter::VisionMethod;
+    let model = ftfusion_testkit::bearing_vision();
     for (seed, truth) in [
         (21, [-2.0e-3, 3.0e-3]),
         (22, [3.4e-3, -1.2e-3]),
@@ -393,10 +392,10 @@ fn vision_pins_down_y_after_one_measurement() {
 
 #[test]
 fn an_image_alone_judges_y_and_leaves_x_spread() {
-    let model = crate::synthetic::bearing_vision();
+    let model = ftfusion_testkit::bearing_vision();
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(31);
     let truth = [2.0e-3, 3.0e-3];
-    let mut f = vision_filter(31, ftmap::vision::VisionMethod::Relative);
+    let mut f = vision_filter(31, crate::filter::VisionMethod::Relative);
     let tcp = [0.0, 0.0, 0.02];
     let v = image(&model, truth, tcp, 0.2, &mut rng);
     let r = f
@@ -430,7 +429,7 @@ fn an_image_alone_judges_y_and_leaves_x_spread() {
 
 #[test]
 fn non_finite_detections_are_refused_by_name() {
-    let mut f = vision_filter(41, ftmap::vision::VisionMethod::Relative);
+    let mut f = vision_filter(41, crate::filter::VisionMethod::Relative);
     let v = VisionMeasurement {
         distances: [1.0, f64::NAN],
         passive: [0.0, 0.0],

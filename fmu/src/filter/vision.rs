@@ -2,7 +2,7 @@
 //! calibrated camera (3d to 2d) and compared with the detected ones, by relative feature
 //! distances (III-B-1) or with a camera recalibrated on the passive part (III-B-2).
 
-use ftmap::vision::{Camera, VisionMethod, VisionModel};
+use ftmap::vision::{Camera, VisionModel};
 use ftmap::{Axis, Pose};
 
 use super::lookup::Lookup;
@@ -10,6 +10,54 @@ use super::lookup::Lookup;
 /// Log-likelihood of a particle whose features the camera cannot see (e.g. the camera would
 /// stand inside the outline): far below any Gaussian term, yet finite.
 const UNSEEN: f32 = -1.0e30;
+
+/// The comparison of section III-B that the filter makes per particle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VisionMethod {
+    /// III-B-1: the measured distances (active to passive edge, left and right) against the
+    /// particle's distances, both parts projected with the calibrated camera.
+    Relative,
+    /// III-B-2: the camera is displaced once per image so that the passive part's detected
+    /// edges fit its nominal pose; the active part's detected edges are compared with its
+    /// edges at the particle's relative pose, projected with the displaced camera.
+    Recalibration,
+}
+
+/// The camera of `model` displaced (translated across its view, in the world's x and y) so that
+/// the passive part's silhouette edges at its nominal pose fall on the detected columns
+/// `passive` (left, right; px): Gauss-Newton on both columns. `None` when the columns
+/// cannot be fitted (the edges out of view, or no displacement within ±50 mm fits).
+pub fn recalibrated(model: &VisionModel, passive: [f64; 2]) -> Option<Camera> {
+    let miss = |t: [f64; 2]| {
+        let c = model
+            .passive
+            .columns(&model.camera.translated([t[0], t[1], 0.0]), [0.0; 3])?;
+        Some([c[0] - passive[0], c[1] - passive[1]])
+    };
+    let (mut t, h) = ([0.0f64; 2], 1e-6);
+    for _ in 0..12 {
+        let m = miss(t)?;
+        if m[0].abs().max(m[1].abs()) < 1e-4 {
+            return Some(model.camera.translated([t[0], t[1], 0.0]));
+        }
+        let (mx, my) = (miss([t[0] + h, t[1]])?, miss([t[0], t[1] + h])?);
+        // Jacobian columns: d(miss)/dtx, d(miss)/dty.
+        let j = [
+            [(mx[0] - m[0]) / h, (my[0] - m[0]) / h],
+            [(mx[1] - m[1]) / h, (my[1] - m[1]) / h],
+        ];
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if det.abs() < 1e-9 {
+            return None;
+        }
+        t[0] -= (j[1][1] * m[0] - j[0][1] * m[1]) / det;
+        t[1] -= (j[0][0] * m[1] - j[1][0] * m[0]) / det;
+        if t[0].abs().max(t[1].abs()) > 0.05 {
+            return None;
+        }
+    }
+    None
+}
 
 /// One image's detections: the FMU's `vision.*` inputs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -81,7 +129,7 @@ impl VisionSense {
                 })
             }
             VisionMethod::Recalibration => {
-                let camera = model.recalibrated(m.passive)?;
+                let camera = recalibrated(model, m.passive)?;
                 let target = [m.passive[0] - m.distances[0], m.passive[1] - m.distances[1]];
                 Some(Prepared {
                     camera,
@@ -129,5 +177,46 @@ impl VisionSense {
                 None => UNSEEN,
             };
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recalibration_moves_the_camera_so_the_passive_part_fits_at_its_nominal_pose() {
+        let m = ftfusion_testkit::bearing_vision();
+        // Part B truly off by `object`: its detected columns; the displaced camera puts the
+        // nominal part there, and part A at tcp - object then lands where A truly is.
+        for object in [
+            [0.0, 0.002, 0.0],
+            [-0.003, 0.0045, 0.0],
+            [0.004, -0.001, 0.0],
+        ] {
+            let seen = m.passive.columns(&m.camera, object).expect("in view");
+            let cam = recalibrated(&m, seen).expect("a displacement fits");
+            let nominal = m.passive.columns(&cam, [0.0; 3]).expect("in view");
+            assert!(
+                (nominal[0] - seen[0]).abs() < 1e-3 && (nominal[1] - seen[1]).abs() < 1e-3,
+                "{nominal:?} {seen:?}"
+            );
+            let truth = m
+                .active
+                .columns(&m.camera, [0.0, 0.0, 0.012])
+                .expect("A at the TCP");
+            let relative = m
+                .active
+                .columns(&cam, [-object[0], -object[1], 0.012])
+                .expect("A relative to B");
+            for k in 0..2 {
+                assert!(
+                    (truth[k] - relative[k]).abs() < 0.01,
+                    "{object:?}: {truth:?} {relative:?}"
+                );
+            }
+        }
+        // Columns no displacement can produce (the part wider than it can look) are refused.
+        assert_eq!(recalibrated(&m, [0.0, 600.0]), None);
     }
 }

@@ -6,18 +6,18 @@ use std::path::PathBuf;
 use std::rc::Rc;
 
 use super::*;
-use crate::synthetic::{field, peg_map};
+use ftfusion_testkit::{field, peg_map};
 
 /// A resources folder holding the synthetic map as `peg.ftmap` and a corrupt copy.
 fn resources() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("ftfusion-instance-{}", std::process::id()));
     let map = peg_map(5e-3, 2.5e-4, None).expect("map");
-    ftmap::format::save(&map, &dir.join("peg.ftmap")).expect("write map");
-    let mut bytes = ftmap::format::to_bytes(&map);
+    ftmap::map::format::save(&map, &dir.join("peg.ftmap")).expect("write map");
+    let mut bytes = ftmap::map::format::to_bytes(&map);
     let at = bytes.len() / 2;
     bytes[at] ^= 0x40;
     std::fs::write(dir.join("corrupt.ftmap"), bytes).expect("write corrupt map");
-    crate::synthetic::bearing_vision()
+    ftfusion_testkit::bearing_vision()
         .save(&dir.join("bearing.vision.json"))
         .expect("write vision model");
     std::fs::write(
@@ -324,7 +324,7 @@ fn an_image_alone_is_measured_on_the_rising_edge_of_vision_valid() {
     i.enter_initialization_mode().expect("allowed");
     i.exit_initialization_mode()
         .expect("valid parameters, map and vision model");
-    let model = crate::synthetic::bearing_vision();
+    let model = ftfusion_testkit::bearing_vision();
     let (truth, tcp) = ([1.0e-3, -2.0e-3, 0.0], [0.0, 0.0, 0.02]);
     let d = model.distances(tcp, truth).expect("in view");
     let p = model

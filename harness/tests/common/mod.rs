@@ -25,7 +25,13 @@ pub fn computed_peg_map() -> &'static FtMap {
     static MAP: OnceLock<FtMap> = OnceLock::new();
     MAP.get_or_init(|| {
         let task = Task::find("peg_in_hole").expect("task peg_in_hole");
-        generate(&task, &ftmap::cpu::CpuBackend, &GenerateOptions::default(), &|_| {}).expect("its computed map")
+        generate(
+            &task,
+            &ftmap::depth::cpu::CpuBackend,
+            &GenerateOptions::default(),
+            &|_| {},
+        )
+        .expect("its computed map")
     })
 }
 
@@ -34,7 +40,8 @@ pub fn computed_peg_map() -> &'static FtMap {
 pub fn bearing() -> (Task, CameraScene, VisionModel) {
     let task = Task::find("bearing_housing").expect("task bearing_housing");
     let spec = SceneSpec::of_task(&task).expect("its scene description");
-    let view = CameraScene::load(&scene_path(&task), spec).expect("its committed scene with camera `vision`");
+    let view = CameraScene::load(&scene_path(&task), spec)
+        .expect("its committed scene with camera `vision`");
     let model = vision::task_model(&task, view.camera()).expect("bearing housing features");
     (task, view, model)
 }

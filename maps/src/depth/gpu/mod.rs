@@ -1,6 +1,6 @@
 //! The wgpu depth backend (Vulkan only; Mesa's lavapipe when no GPU is present): a render
 //! pipeline with a depth buffer for the orthographic z-buffer images and a compute shader
-//! for the shifted-difference contact reduction, both equal to [`crate::cpu`] up to the
+//! for the shifted-difference contact reduction, both equal to [`crate::depth::cpu`] up to the
 //! documented rounding.
 //!
 //! Coverage: the rasterizer covers each triangle grown by [`GROW_PX`] pixel and the
@@ -775,7 +775,7 @@ fn uniform_entry(visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
 fn render_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::RenderPipeline) {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("render.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("gpu/render.wgsl").into()),
+        source: wgpu::ShaderSource::Wgsl(include_str!("render.wgsl").into()),
     });
     let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -833,7 +833,7 @@ fn render_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::Rende
 fn contact_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline) {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("contacts.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("gpu/contacts.wgsl").into()),
+        source: wgpu::ShaderSource::Wgsl(include_str!("contacts.wgsl").into()),
     });
     let cs = wgpu::ShaderStages::COMPUTE;
     let mut entries = vec![uniform_entry(cs)];

@@ -3,26 +3,26 @@
 
 use std::path::Path;
 
+use anyhow::{Result, bail};
 use plotters::prelude::*;
 
-use crate::error::{MapError, Result};
-use crate::grid::MAX_AXES;
-use crate::map::{CHANNELS, FtMap, UNITS, channel_index};
+use ftmap::map::{CHANNELS, FtMap, UNITS, channel_index};
+use ftmap::task::omega::MAX_AXES;
 
 /// A 2-D slice of one channel: values over two axes with the others fixed.
 #[derive(Debug, Clone)]
-pub struct Slice {
+struct Slice {
     /// Grid axes shown along x and y.
-    pub axes: [usize; 2],
+    axes: [usize; 2],
     /// Values, row-major with x fastest.
-    pub values: Vec<f64>,
+    values: Vec<f64>,
     /// Description of the fixed axes, e.g. `object.rx=0.00°`.
-    pub fixed: String,
+    fixed: String,
 }
 
 /// Cuts the slice of `channel` over the first two axes (or `axes`), other axes at the
 /// samples nearest to the values in `at` (default 0).
-pub fn slice(
+fn slice(
     map: &FtMap,
     channel: &str,
     axes: Option<[usize; 2]>,
@@ -31,9 +31,7 @@ pub fn slice(
     let ch = channel_index(channel)?;
     let grid = map.grid();
     if grid.ndim() < 2 {
-        return Err(MapError::Grid(
-            "a heat map needs a grid of at least 2 axes".into(),
-        ));
+        bail!("a heat map needs a grid of at least 2 axes");
     }
     let axes = axes.unwrap_or([0, 1]);
     let mut idx = [0usize; MAX_AXES];
@@ -55,9 +53,7 @@ pub fn slice(
             .iter()
             .any(|a| a.dof.to_string() == *name || a.dof.axis.name() == name)
         {
-            return Err(MapError::Grid(format!(
-                "--at {name}: the map has no such axis"
-            )));
+            bail!("--at {name}: the map has no such axis");
         }
     }
     let (ax, ay) = (grid.axes()[axes[0]], grid.axes()[axes[1]]);
@@ -106,10 +102,7 @@ pub fn heat_map(
     out: &Path,
 ) -> Result<()> {
     let s = slice(map, channel, axes, at)?;
-    draw(map, channel, &s, out).map_err(|e| MapError::Io {
-        path: out.to_owned(),
-        source: std::io::Error::other(e.to_string()),
-    })
+    draw(map, channel, &s, out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))
 }
 
 fn draw(

@@ -25,7 +25,7 @@ fn ok(args: &[&str]) -> String {
 fn scratch(name: &str) -> (PathBuf, PathBuf) {
     let dir = std::env::temp_dir().join(format!("ftmap-cli-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch task");
-    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models_mjcf/peg_in_hole");
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models_mjcf/peg_in_hole");
     let text = std::fs::read_to_string(models.join("task.toml"))
         .expect("scratch task")
         .replace("size_trans = 0.005", "size_trans = 0.001")
@@ -70,7 +70,7 @@ fn generate_info_export_and_plot_agree_with_each_other() {
             "object.x", "object.y", "fx", "fy", "fz", "tx", "ty", "tz", "depth"
         ]
     );
-    let loaded = ftmap::format::load(&map).unwrap();
+    let loaded = ftmap::map::format::load(&map).unwrap();
     let mut rows = 0;
     for rec in rd.records() {
         let v: Vec<f64> = rec.unwrap().iter().map(|s| s.parse().unwrap()).collect();
@@ -145,8 +145,8 @@ fn shards_merge_into_the_whole_map() {
     args.extend(["--out", merged.to_str().unwrap()]);
     ok(&args);
     let (a, b) = (
-        ftmap::format::load(&whole).unwrap(),
-        ftmap::format::load(&merged).unwrap(),
+        ftmap::map::format::load(&whole).unwrap(),
+        ftmap::map::format::load(&merged).unwrap(),
     );
     assert_eq!(a.data(), b.data());
     let missing = ftmap(&[

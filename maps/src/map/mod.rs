@@ -4,7 +4,10 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{MapError, Result};
-use crate::grid::Grid;
+use crate::task::omega::Grid;
+use crate::wrench::WrenchModel;
+
+pub mod format;
 
 /// Channels stored per cell, in order.
 pub const CHANNELS: [&str; 7] = ["fx", "fy", "fz", "tx", "ty", "tz", "depth"];
@@ -21,19 +24,6 @@ pub fn channel_index(name: &str) -> Result<usize> {
             CHANNELS.join(", ")
         ))
     })
-}
-
-/// How the wrench of a contact configuration was obtained.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum WrenchModel {
-    /// The paper's: force from contact normals and friction (Eq. 2), torque 0 when the
-    /// sensor axis meets the contact hull, else PK x F.
-    Paper,
-    /// Pressure spread evenly over the contact area: torque = (centroid - sensor) x F.
-    Centroid,
-    /// Scanned by contact motions in a (simulated) work cell.
-    Measured,
 }
 
 /// A source mesh of a map and its SHA-256.
@@ -152,8 +142,8 @@ impl FtMap {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::dof::{Axis, Dof, Pose};
-    use crate::grid::GridAxis;
+    use crate::task::dof::{Axis, Dof, Pose};
+    use crate::task::omega::GridAxis;
 
     /// A small map whose channels are known functions of the coordinates.
     pub(crate) fn sample_map() -> FtMap {

@@ -1,5 +1,4 @@
-//! `ftmap`: computes Force Torque Maps from a task's CAD meshes, and inspects, exports,
-//! plots, benchmarks and merges them.
+#![doc = include_str!("../README.md")]
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -10,7 +9,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use ftmap::depth::DepthBackend;
 use ftmap::generate::{GenerateOptions, generate, merge, shard_configs};
-use ftmap::{CHANNELS, FtMap, Task, UNITS, WrenchModel, cad, format, plot};
+use ftmap::map::format;
+use ftmap::{CHANNELS, FtMap, Task, UNITS, WrenchModel};
+
+mod plot;
 
 #[derive(Parser)]
 #[command(
@@ -32,6 +34,25 @@ enum BackendKind {
     Gpu,
 }
 
+/// The wrench models a map can be computed with (`measured` maps come from `harness scan`).
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ModelArg {
+    /// The paper's: force from contact normals and friction (Eq. 2), torque from the
+    /// convex-hull lever rule.
+    Paper,
+    /// Pressure spread evenly over the contact area: torque about the contact centroid.
+    Centroid,
+}
+
+impl From<ModelArg> for WrenchModel {
+    fn from(m: ModelArg) -> Self {
+        match m {
+            ModelArg::Paper => Self::Paper,
+            ModelArg::Centroid => Self::Centroid,
+        }
+    }
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Computes the FT-Map of a task.
@@ -42,7 +63,7 @@ enum Cmd {
         #[arg(long, value_enum, default_value = "cpu")]
         backend: BackendKind,
         #[arg(long, value_enum, default_value = "centroid")]
-        model: WrenchModel,
+        model: ModelArg,
         /// Output map file.
         #[arg(long)]
         out: PathBuf,
@@ -84,7 +105,7 @@ enum Cmd {
         #[arg(long, value_enum)]
         backend: Vec<BackendKind>,
         #[arg(long, value_enum, default_value = "centroid")]
-        model: WrenchModel,
+        model: ModelArg,
         /// Fail when the GPU backend finds only a CPU adapter.
         #[arg(long, env = "FTMAP_REQUIRE_GPU")]
         require_gpu: bool,
@@ -146,7 +167,7 @@ fn main() -> Result<()> {
             out,
             shard,
             require_gpu,
-        } => cmd_generate(&task, backend, model, &out, shard, require_gpu),
+        } => cmd_generate(&task, backend, model.into(), &out, shard, require_gpu),
         Cmd::Info { file } => cmd_info(&file),
         Cmd::ExportCsv { file, out } => cmd_export_csv(&file, &out),
         Cmd::Plot {
@@ -161,7 +182,7 @@ fn main() -> Result<()> {
             backend,
             model,
             require_gpu,
-        } => cmd_bench(&task, &backend, model, require_gpu),
+        } => cmd_bench(&task, &backend, model.into(), require_gpu),
         Cmd::Merge { shards, out } => cmd_merge(&shards, &out),
         Cmd::Vision { task, out } => cmd_vision(&task, &out),
         Cmd::Cad { task, check } => cmd_cad(&task, check),
@@ -195,14 +216,14 @@ fn cmd_vision(task: &str, out: &Path) -> Result<()> {
 #[cfg_attr(not(feature = "gpu"), allow(unused_variables))]
 fn make_backend(kind: BackendKind, require_gpu: bool) -> Result<Box<dyn DepthBackend>> {
     Ok(match kind {
-        BackendKind::Cpu => Box::new(ftmap::cpu::CpuBackend),
+        BackendKind::Cpu => Box::new(ftmap::depth::cpu::CpuBackend),
         #[cfg(not(feature = "gpu"))]
         BackendKind::Gpu => {
             bail!("this build of ftmap has no GPU backend (built without the `gpu` feature)")
         }
         #[cfg(feature = "gpu")]
         BackendKind::Gpu => {
-            let gpu = ftmap::gpu::GpuBackend::new().context("starting the GPU backend")?;
+            let gpu = ftmap::depth::gpu::GpuBackend::new().context("starting the GPU backend")?;
             eprintln!("GPU adapter: {}", gpu.name());
             if require_gpu && gpu.is_cpu_adapter() {
                 bail!(
@@ -466,27 +487,21 @@ fn cmd_merge(shards: &[PathBuf], out: &Path) -> Result<()> {
 }
 
 fn cmd_cad(task: &str, check: bool) -> Result<()> {
-    let dirs = if task == "all" {
-        cad::task_dirs_with_geometry(&ftmap::task::models_root())?
+    let tasks = if task == "all" {
+        Task::all_with_geometry()?
     } else {
-        vec![
-            Task::find(task)?
-                .path
-                .parent()
-                .map(Path::to_owned)
-                .unwrap_or_default(),
-        ]
+        vec![Task::find(task)?]
     };
     let mut stale_total = 0;
-    for dir in dirs {
+    for task in tasks {
         if check {
-            let stale = cad::check_task_meshes(&dir)?;
+            let stale = task.stale_meshes()?;
             for f in &stale {
-                println!("{}: {f} is stale", dir.display());
+                println!("{}: {f} is stale", task.name);
             }
             stale_total += stale.len();
         } else {
-            for f in cad::write_task_meshes(&dir)? {
+            for f in task.write_meshes()? {
                 println!("wrote {}", f.display());
             }
         }

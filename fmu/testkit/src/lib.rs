@@ -1,6 +1,7 @@
-//! Analytic FT-Maps for tests and benchmarks: the field of a flat peg resting on the rim of
-//! its hole (torque direction z x offset, lever shrinking with the offset), over object
-//! translations and, optionally, object tilts; no CAD meshes needed.
+//! Fixtures of the `ftfusion` crate's tests and benchmark, kept out of the FMU's library:
+//! an analytic FT-Map (the field of a flat peg resting on the rim of its hole: torque
+//! direction z x offset, lever shrinking with the offset) over object translations and,
+//! optionally, object tilts, with no CAD meshes needed; and experiment D's vision model.
 
 use ftmap::{Axis, Dof, FtMap, Grid, GridAxis, MapMeta, Pose, WrenchModel};
 
@@ -65,8 +66,7 @@ pub fn peg_map(size: f64, step: f64, rot: Option<(f64, f64)>) -> ftmap::Result<F
 }
 
 /// Experiment D's vision model, from the bearing_housing task's `[camera]` and `[geometry]`.
-#[cfg(test)]
-pub(crate) fn bearing_vision() -> ftmap::vision::VisionModel {
+pub fn bearing_vision() -> ftmap::vision::VisionModel {
     let task = ftmap::Task::find("bearing_housing").expect("task bearing_housing");
     ftmap::vision::VisionModel::of_task(&task)
         .expect("valid tables")

@@ -3,8 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::dof::Dof;
 use crate::error::{MapError, Result};
+use crate::task::dof::Dof;
 
 /// Largest number of axes a grid can have (every DOF of both poses).
 pub const MAX_AXES: usize = 12;
@@ -243,7 +243,7 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dof::{Axis, Pose};
+    use crate::task::dof::{Axis, Pose};
 
     fn dof(a: Axis) -> Dof {
         Dof::new(Pose::Object, a)

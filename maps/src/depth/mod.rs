@@ -6,6 +6,10 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use crate::error::Result;
 use crate::mesh::Mesh;
 
+pub mod cpu;
+#[cfg(feature = "gpu")]
+pub mod gpu;
+
 /// Height value of a pixel where A has no surface (never in contact).
 pub const EMPTY_A: f32 = f32::INFINITY;
 /// Height value of a pixel where B has no surface (nothing to rest on).

@@ -14,8 +14,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{MapError, Result};
-use crate::grid::Grid;
 use crate::map::{CHANNELS, FtMap, MapMeta, NCH, UNITS};
+use crate::task::omega::Grid;
 
 /// First bytes of every FT-Map file.
 pub const MAGIC: [u8; 8] = *b"FTMAP\0\r\n";

@@ -14,11 +14,8 @@
 //! the flats.
 
 use std::f64::consts::{PI, TAU};
-use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
-
-use crate::error::{MapError, Result};
 
 /// The dimensions of a task's two parts, the `[geometry]` table of its task file (m).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -280,57 +277,6 @@ impl Geometry {
     }
 }
 
-/// Reads and checks the `[geometry]` table of a task file.
-pub fn geometry_of(task_toml: &Path) -> Result<Geometry> {
-    #[derive(Deserialize)]
-    struct WithGeometry {
-        geometry: Option<Geometry>,
-    }
-    let err = |reason: String| MapError::Task {
-        path: task_toml.to_owned(),
-        reason,
-    };
-    let text = std::fs::read_to_string(task_toml).map_err(|e| err(e.to_string()))?;
-    let file: WithGeometry = toml::from_str(&text).map_err(|e| err(format!("[geometry]: {e}")))?;
-    let geometry = file
-        .geometry
-        .ok_or_else(|| err("no [geometry] table: its meshes are not generated".into()))?;
-    geometry
-        .check()
-        .map_err(|reason| err(format!("[geometry]: {reason}")))?;
-    Ok(geometry)
-}
-
-/// The task folders under `root` whose `task.toml` has a `[geometry]` table, sorted.
-pub fn task_dirs_with_geometry(root: &Path) -> Result<Vec<PathBuf>> {
-    let entries = std::fs::read_dir(root).map_err(|source| MapError::Io {
-        path: root.to_owned(),
-        source,
-    })?;
-    let mut dirs = Vec::new();
-    for entry in entries {
-        let dir = entry
-            .map_err(|source| MapError::Io {
-                path: root.to_owned(),
-                source,
-            })?
-            .path();
-        let toml_path = dir.join("task.toml");
-        let Ok(text) = std::fs::read_to_string(&toml_path) else {
-            continue;
-        };
-        let table: toml::Table = toml::from_str(&text).map_err(|e| MapError::Task {
-            path: toml_path.clone(),
-            reason: e.to_string(),
-        })?;
-        if table.contains_key("geometry") {
-            dirs.push(dir);
-        }
-    }
-    dirs.sort();
-    Ok(dirs)
-}
-
 /// Builds the two parts of a task.
 pub fn meshes(g: &Geometry) -> Vec<NamedMesh> {
     let named = |file, role, triangles: Vec<Tri>| NamedMesh {
@@ -481,32 +427,6 @@ pub fn stl_bytes(triangles: &[[[f32; 3]; 3]]) -> Vec<u8> {
     let mut bytes = Vec::with_capacity(84 + 50 * stl.len());
     stl_io::write_stl(&mut bytes, stl.iter()).expect("writing to memory does not fail");
     bytes
-}
-
-/// Generates a task's meshes from its `[geometry]` and writes them next to its `task.toml`.
-pub fn write_task_meshes(task_dir: &Path) -> Result<Vec<PathBuf>> {
-    let geometry = geometry_of(&task_dir.join("task.toml"))?;
-    meshes(&geometry)
-        .into_iter()
-        .map(|m| {
-            let path = task_dir.join(m.file);
-            std::fs::write(&path, stl_bytes(&m.triangles)).map_err(|source| MapError::Io {
-                path: path.clone(),
-                source,
-            })?;
-            Ok(path)
-        })
-        .collect()
-}
-
-/// Names of the task's mesh files that are missing or differ from what its `[geometry]` gives.
-pub fn check_task_meshes(task_dir: &Path) -> Result<Vec<String>> {
-    let geometry = geometry_of(&task_dir.join("task.toml"))?;
-    Ok(meshes(&geometry)
-        .into_iter()
-        .filter(|m| std::fs::read(task_dir.join(m.file)).ok() != Some(stl_bytes(&m.triangles)))
-        .map(|m| m.file.to_owned())
-        .collect())
 }
 
 /// A triangle in f64 (m).
@@ -694,6 +614,7 @@ mod tests {
     use std::collections::HashMap;
 
     use super::*;
+    use crate::Task;
 
     const MM: f64 = 1e-3;
     /// Half an f32 step at 40 mm is 1.9 nm: coordinates are compared to 5 nm.
@@ -705,13 +626,11 @@ mod tests {
         ("bearing_housing", ["housing.stl", "seat.stl"]),
     ];
 
-    fn models() -> PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../models_mjcf")
-    }
-
     fn geometry(task: &str) -> Geometry {
-        geometry_of(&models().join(task).join("task.toml"))
-            .expect("committed task files have a valid [geometry]")
+        Task::find(task)
+            .expect("committed task files load")
+            .geometry
+            .expect("committed task files have a [geometry]")
     }
 
     /// The triangles of one generated part, in f64.
@@ -1154,63 +1073,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("ftmap-cad-{name}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
-        dir
-    }
-
-    #[test]
-    fn bad_geometry_tables_are_refused_with_the_file_and_reason() {
-        let dir = temp_dir("bad");
-        let path = dir.join("task.toml");
-        let good = "kind = \"round_peg\"\npeg_radius = 0.00495\npeg_length = 0.04\nhole_radius = 0.005\n\
-                    hole_depth = 0.01\nblock = [0.04, 0.04, 0.02]\nsegments = 256\n";
-        let cases = [
-            ("name = \"x\"\n".to_owned(), "no [geometry]"),
-            ("[geometry]\nkind = \"hexagon\"\n".to_owned(), "hexagon"),
-            (format!("[geometry]\n{good}colour = 1\n"), "colour"),
-            (
-                format!("[geometry]\n{}", good.replace("0.00495", "0.0051")),
-                "peg_radius",
-            ),
-            (
-                format!("[geometry]\n{}", good.replace("256", "30")),
-                "segments",
-            ),
-        ];
-        for (text, needle) in cases {
-            std::fs::write(&path, &text).expect("write");
-            let e = geometry_of(&path).expect_err(&text);
-            assert!(matches!(e, MapError::Task { .. }), "{e}");
-            let msg = e.to_string();
-            assert!(msg.contains(needle) && msg.contains("task.toml"), "{msg}");
-        }
-        std::fs::write(&path, format!("[geometry]\n{good}")).expect("write");
-        assert!(geometry_of(&path).is_ok());
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn stale_and_missing_files_are_reported() {
-        let dir = temp_dir("stale");
-        let text =
-            std::fs::read_to_string(models().join("octagon/task.toml")).expect("octagon task");
-        std::fs::write(dir.join("task.toml"), text).expect("write");
-        let written = write_task_meshes(&dir).expect("write meshes");
-        assert_eq!(written, [dir.join("peg.stl"), dir.join("block.stl")]);
-        assert!(check_task_meshes(&dir).expect("check").is_empty());
-        let mut bytes = std::fs::read(dir.join("block.stl")).expect("read");
-        bytes[100] ^= 1;
-        std::fs::write(dir.join("block.stl"), bytes).expect("write");
-        std::fs::remove_file(dir.join("peg.stl")).expect("remove");
-        assert_eq!(
-            check_task_meshes(&dir).expect("check"),
-            ["peg.stl", "block.stl"]
-        );
-        std::fs::remove_dir_all(dir).ok();
     }
 
     #[test]

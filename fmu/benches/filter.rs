@@ -10,7 +10,7 @@ use std::time::Instant;
 use ftfusion::filter::{Config, Filter, Interpolation, Measurement};
 use ftfusion::instance::{Instance, Status};
 use ftfusion::params::Value;
-use ftfusion::synthetic::{field, peg_map};
+use ftfusion_testkit::{field, peg_map};
 use model_description::{VarType, by_name};
 
 fn arg(args: &[String], name: &str, default: usize) -> usize {
@@ -74,7 +74,7 @@ fn main() -> anyhow::Result<()> {
     // One doStep without a new measurement, through the FMU instance layer.
     let dir = std::env::temp_dir().join(format!("ftfusion-bench-{}", std::process::id()));
     let path = dir.join("peg4.ftmap");
-    ftmap::format::save(&map, &path)?;
+    ftmap::map::format::save(&map, &path)?;
     let mut inst = Instance::new("bench", None, Box::new(|_, _, _| {}), false);
     let vr = |n: &str| by_name(n).map(|v| v.vr).unwrap_or(0);
     inst.set(

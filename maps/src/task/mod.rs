@@ -1,0 +1,517 @@
+//! Assembly tasks as described by `models_mjcf/<task>/task.toml`: the two parts' meshes,
+//! the approach vector, imposed force, friction, sensor origin, the tolerance space Omega,
+//! the depth-map settings, the parts' parametric geometry and the camera. One source of
+//! truth for the map, the FMU and the scene: the file is parsed once, into [`Task`].
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::error::{MapError, Result};
+
+pub mod cad;
+pub mod dof;
+pub mod omega;
+
+use cad::Geometry;
+use dof::{Axis, Dof, Pose};
+use omega::{Grid, GridAxis};
+
+/// A part of the task: its mesh file (relative to the task file).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Part {
+    /// Binary or ASCII STL, metres, in the part's own frame.
+    pub mesh: PathBuf,
+}
+
+/// How contact is made: along `approach` with `force`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Contact {
+    /// Approach vector a in the nominal task frame (normalised on load).
+    pub approach: [f64; 3],
+    /// Imposed force along a (N).
+    pub force: f64,
+    /// Friction coefficient between the parts.
+    pub friction: f64,
+    /// Origin of the F/T sensor in the nominal task frame (m).
+    pub sensor_origin: [f64; 3],
+}
+
+/// The tolerance space Omega (paper, Definition 2.1.1) as a box grid.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Omega {
+    /// Uncertain axes of the grip pose r1 (`x` .. `rz`).
+    #[serde(default)]
+    pub grip: Vec<String>,
+    /// Uncertain axes of the task-to-object pose r2 (`x` .. `rz`).
+    #[serde(default)]
+    pub object: Vec<String>,
+    /// Translational bound: values lie in [-size_trans, size_trans] (m).
+    pub size_trans: f64,
+    /// Translational step (m).
+    pub delta_trans: f64,
+    /// Rotational bound (rad).
+    #[serde(default)]
+    pub size_rot: f64,
+    /// Rotational step (rad).
+    #[serde(default = "default_delta_rot")]
+    pub delta_rot: f64,
+}
+
+fn default_delta_rot() -> f64 {
+    0.5f64.to_radians()
+}
+
+/// Settings of the z-buffer computation.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DepthSettings {
+    /// Pixel size (m); must divide the translational step.
+    pub pixel: f64,
+    /// Pixels within this distance of the minimal gap are contacts (m).
+    pub tolerance: f64,
+}
+
+/// A task's `[camera]` table: a calibrated camera set up as in experiment D, in front of
+/// the goal along -x, looking along +x, tilted down so that its optical axis meets the
+/// goal's x = 0 plane at `aim_z`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSetup {
+    /// Distance in front of the goal along -x (m).
+    pub distance: f64,
+    /// Height at which the optical axis meets the goal's x = 0 plane (m).
+    pub aim_z: f64,
+    /// Downward tilt (degrees).
+    pub pitch_deg: f64,
+    /// Vertical field of view (degrees).
+    pub fovy: f64,
+    /// Image width and height (px).
+    pub size: [usize; 2],
+}
+
+impl CameraSetup {
+    /// Checks that the table describes a usable camera; the reason if not.
+    fn check(&self) -> std::result::Result<(), String> {
+        if !(self.distance > 0.0 && self.distance.is_finite()) {
+            return Err(format!("distance {} must be > 0", self.distance));
+        }
+        if !self.aim_z.is_finite() {
+            return Err(format!("aim_z {} must be finite", self.aim_z));
+        }
+        if self.pitch_deg.is_nan() || self.pitch_deg.abs() >= 90.0 {
+            return Err(format!("|pitch_deg| {} must be < 90", self.pitch_deg));
+        }
+        if !(self.fovy > 0.0 && self.fovy < 180.0) {
+            return Err(format!("fovy {} degrees must lie in (0, 180)", self.fovy));
+        }
+        if self.size[0] < 2 || self.size[1] < 2 {
+            return Err(format!(
+                "size {}x{} px: need at least 2x2",
+                self.size[0], self.size[1]
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A task file as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TaskFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    part_a: Part,
+    part_b: Part,
+    contact: Contact,
+    omega: Omega,
+    depth: DepthSettings,
+    geometry: Option<toml::Value>,
+    camera: Option<toml::Value>,
+}
+
+/// A loaded task with resolved paths.
+#[derive(Debug, Clone)]
+pub struct Task {
+    /// Task name.
+    pub name: String,
+    /// One line on what is assembled.
+    pub description: String,
+    /// The task file.
+    pub path: PathBuf,
+    /// Active (gripped) part A; its frame is the task frame, the tip at its origin.
+    pub part_a: Part,
+    /// Passive (fixed) part B; its frame is the goal frame (mated: both frames coincide).
+    pub part_b: Part,
+    /// Approach, force, friction and sensor.
+    pub contact: Contact,
+    /// The tolerance space.
+    pub omega: Omega,
+    /// Depth-map settings.
+    pub depth: DepthSettings,
+    /// The parts' dimensions when their meshes are generated from them (`[geometry]`).
+    pub geometry: Option<Geometry>,
+    /// The calibrated camera of a vision task (`[camera]`).
+    pub camera: Option<CameraSetup>,
+}
+
+/// The folder holding one sub-folder per task: `$FTFUSION_MODELS`, else the nearest
+/// `models_mjcf/` above the working directory, else the one of this source tree.
+pub fn models_root() -> PathBuf {
+    if let Some(dir) = std::env::var_os("FTFUSION_MODELS") {
+        return PathBuf::from(dir);
+    }
+    if let Ok(cwd) = std::env::current_dir() {
+        for dir in cwd.ancestors() {
+            let candidate = dir.join("models_mjcf");
+            if candidate.is_dir() {
+                return candidate;
+            }
+        }
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../models_mjcf")
+}
+
+impl Task {
+    /// Loads a task by name (`peg_in_hole`), folder, or path of a `task.toml`.
+    pub fn find(name_or_path: &str) -> Result<Self> {
+        let given = Path::new(name_or_path);
+        let path = if given.is_file() {
+            given.to_owned()
+        } else if given.is_dir() {
+            given.join("task.toml")
+        } else {
+            models_root().join(name_or_path).join("task.toml")
+        };
+        if !path.is_file() {
+            let known = Self::names().join(", ");
+            return Err(MapError::Task {
+                path: given.to_owned(),
+                reason: format!("no such task file or task name (known tasks: {known})"),
+            });
+        }
+        Self::load(&path)
+    }
+
+    /// Names of the tasks under [`models_root`].
+    pub fn names() -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(models_root())
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter(|e| e.path().join("task.toml").is_file())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    /// Loads and checks a task file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let err = |reason: String| MapError::Task {
+            path: path.to_owned(),
+            reason,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        let file: TaskFile = toml::from_str(&text).map_err(|e| err(e.to_string()))?;
+        // The optional tables are read on their own, so that an error names its table.
+        fn table<T: serde::de::DeserializeOwned>(
+            name: &str,
+            value: Option<toml::Value>,
+            check: impl Fn(&T) -> std::result::Result<(), String>,
+        ) -> std::result::Result<Option<T>, String> {
+            let Some(value) = value else {
+                return Ok(None);
+            };
+            let t: T = value.try_into().map_err(|e| format!("[{name}]: {e}"))?;
+            check(&t).map_err(|reason| format!("[{name}]: {reason}"))?;
+            Ok(Some(t))
+        }
+        let geometry = table("geometry", file.geometry, Geometry::check).map_err(err)?;
+        let camera = table("camera", file.camera, CameraSetup::check).map_err(err)?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let mut contact = file.contact;
+        let a = contact.approach;
+        let norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        if !(norm > 1e-9 && norm.is_finite()) {
+            return Err(err(format!("contact.approach {a:?} is not a direction")));
+        }
+        contact.approach = a.map(|v| v / norm);
+        if !(contact.force > 0.0 && contact.force.is_finite()) {
+            return Err(err(format!("contact.force {} must be > 0", contact.force)));
+        }
+        if !(contact.friction >= 0.0 && contact.friction.is_finite()) {
+            return Err(err(format!(
+                "contact.friction {} must be >= 0",
+                contact.friction
+            )));
+        }
+        let d = &file.depth;
+        if !(d.pixel > 0.0 && d.tolerance >= 0.0 && d.pixel.is_finite() && d.tolerance.is_finite())
+        {
+            return Err(err(format!(
+                "depth.pixel {} must be > 0, depth.tolerance {} >= 0",
+                d.pixel, d.tolerance
+            )));
+        }
+        let task = Self {
+            name: file.name,
+            description: file.description,
+            path: path.to_owned(),
+            part_a: Part {
+                mesh: dir.join(file.part_a.mesh),
+            },
+            part_b: Part {
+                mesh: dir.join(file.part_b.mesh),
+            },
+            contact,
+            omega: file.omega,
+            depth: file.depth,
+            geometry,
+            camera,
+        };
+        task.grid().map_err(|e| err(e.to_string()))?;
+        Ok(task)
+    }
+
+    /// The uncertain DOFs in grid order: grip axes, then object axes, as listed.
+    pub fn dofs(&self) -> Result<Vec<Dof>> {
+        let parse = |pose, names: &[String], key: &str| -> Result<Vec<Dof>> {
+            names
+                .iter()
+                .map(|n| {
+                    Axis::ALL
+                        .into_iter()
+                        .find(|a| a.name() == n)
+                        .map(|a| Dof::new(pose, a))
+                        .ok_or_else(|| MapError::Task {
+                            path: self.path.clone(),
+                            reason: format!("omega.{key}: unknown axis `{n}`"),
+                        })
+                })
+                .collect()
+        };
+        let mut dofs = parse(Pose::Grip, &self.omega.grip, "grip")?;
+        dofs.extend(parse(Pose::Object, &self.omega.object, "object")?);
+        Ok(dofs)
+    }
+
+    /// The grid over Omega; the pixel size must divide the translation step.
+    pub fn grid(&self) -> Result<Grid> {
+        let o = &self.omega;
+        let ratio = o.delta_trans / self.depth.pixel;
+        if (ratio - ratio.round()).abs() > 1e-6 || ratio.round() < 1.0 {
+            return Err(MapError::Task {
+                path: self.path.clone(),
+                reason: format!(
+                    "depth.pixel {} must divide omega.delta_trans {} (translations are whole-pixel shifts)",
+                    self.depth.pixel, o.delta_trans
+                ),
+            });
+        }
+        let axes = self
+            .dofs()?
+            .into_iter()
+            .map(|dof| {
+                if dof.is_rotation() {
+                    GridAxis::symmetric(dof, o.size_rot, o.delta_rot)
+                } else {
+                    GridAxis::symmetric(dof, o.size_trans, o.delta_trans)
+                }
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Grid::new(axes)
+    }
+
+    /// The task's `[geometry]`, or an error naming the task file when it has none.
+    pub fn geometry(&self) -> Result<&Geometry> {
+        self.geometry.as_ref().ok_or_else(|| MapError::Task {
+            path: self.path.clone(),
+            reason: "no [geometry] table: its meshes are not generated".into(),
+        })
+    }
+
+    /// The folder of the task file, where its meshes lie.
+    fn dir(&self) -> &Path {
+        self.path.parent().unwrap_or(Path::new("."))
+    }
+
+    /// Generates the parts from the task's `[geometry]` and writes them as binary STL next
+    /// to its task file; the paths written.
+    pub fn write_meshes(&self) -> Result<Vec<PathBuf>> {
+        cad::meshes(self.geometry()?)
+            .into_iter()
+            .map(|m| {
+                let path = self.dir().join(m.file);
+                std::fs::write(&path, cad::stl_bytes(&m.triangles)).map_err(|source| {
+                    MapError::Io {
+                        path: path.clone(),
+                        source,
+                    }
+                })?;
+                Ok(path)
+            })
+            .collect()
+    }
+
+    /// Names of the task's mesh files that are missing or differ from what its
+    /// `[geometry]` gives.
+    pub fn stale_meshes(&self) -> Result<Vec<String>> {
+        Ok(cad::meshes(self.geometry()?)
+            .into_iter()
+            .filter(|m| {
+                std::fs::read(self.dir().join(m.file)).ok() != Some(cad::stl_bytes(&m.triangles))
+            })
+            .map(|m| m.file.to_owned())
+            .collect())
+    }
+
+    /// The tasks under [`models_root`] whose meshes are generated from a `[geometry]`.
+    pub fn all_with_geometry() -> Result<Vec<Self>> {
+        let mut tasks = Vec::new();
+        for name in Self::names() {
+            let task = Self::find(&name)?;
+            if task.geometry.is_some() {
+                tasks.push(task);
+            }
+        }
+        Ok(tasks)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("ftmap-task-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir
+    }
+
+    /// A committed task file's text.
+    fn text_of(task: &str) -> String {
+        std::fs::read_to_string(Task::find(task).expect("committed task").path).expect("text")
+    }
+
+    #[test]
+    fn the_whole_file_is_read_into_typed_fields() {
+        let task = Task::find("bearing_housing").expect("task");
+        assert!(matches!(
+            task.geometry,
+            Some(Geometry::BearingHousing { segments: 256, .. })
+        ));
+        let cam = task.camera.expect("experiment D's camera");
+        assert_eq!((cam.distance, cam.size), (0.2, [640, 480]));
+        let peg = Task::find("peg_in_hole").expect("task");
+        assert!(peg.camera.is_none() && peg.geometry.is_some());
+        assert!(
+            Task::find("peg_in_hole_4dof")
+                .expect("task")
+                .geometry
+                .is_none()
+        );
+    }
+
+    #[test]
+    fn broken_tables_are_named_with_the_file() {
+        let dir = temp_dir("bad");
+        let path = dir.join("task.toml");
+        let bearing = text_of("bearing_housing");
+        let peg = text_of("peg_in_hole");
+        let cases = [
+            (
+                bearing.replace("fovy = 12.0", "fovy = 200.0"),
+                "[camera]",
+                "fovy",
+            ),
+            (
+                bearing.replace("size = [640, 480]", "size = [640]"),
+                "[camera]",
+                "size",
+            ),
+            (
+                bearing.replace("aim_z =", "aim_height ="),
+                "[camera]",
+                "aim_height",
+            ),
+            (
+                bearing.replace("pitch_deg = 8.0", "pitch_deg = 95.0"),
+                "[camera]",
+                "pitch_deg",
+            ),
+            (
+                peg.replace("kind = \"round_peg\"", "kind = \"hexagon\""),
+                "[geometry]",
+                "hexagon",
+            ),
+            (
+                peg.replace("segments = 256", "segments = 256\ncolour = 1"),
+                "[geometry]",
+                "colour",
+            ),
+            (
+                peg.replace("peg_radius = 0.00495", "peg_radius = 0.0051"),
+                "[geometry]",
+                "peg_radius",
+            ),
+            (
+                peg.replace("segments = 256", "segments = 30"),
+                "[geometry]",
+                "segments",
+            ),
+            (
+                format!("{peg}\n[scene]\nfloor = 1\n"),
+                "scene",
+                "unknown field",
+            ),
+        ];
+        for (text, table, needle) in cases {
+            assert!(
+                text != bearing && text != peg,
+                "{needle}: the case changes a file"
+            );
+            std::fs::write(&path, &text).expect("write");
+            let e = Task::load(&path).expect_err(needle);
+            assert!(matches!(e, MapError::Task { .. }), "{e}");
+            let msg = e.to_string();
+            assert!(
+                msg.contains(table) && msg.contains(needle) && msg.contains("task.toml"),
+                "{msg}"
+            );
+        }
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn meshes_are_written_and_stale_or_missing_ones_reported() {
+        let dir = temp_dir("stale");
+        std::fs::write(dir.join("task.toml"), text_of("octagon")).expect("write");
+        let task = Task::load(&dir.join("task.toml")).expect("task");
+        let written = task.write_meshes().expect("write meshes");
+        assert_eq!(written, [dir.join("peg.stl"), dir.join("block.stl")]);
+        assert!(task.stale_meshes().expect("check").is_empty());
+        let mut bytes = std::fs::read(dir.join("block.stl")).expect("read");
+        bytes[100] ^= 1;
+        std::fs::write(dir.join("block.stl"), bytes).expect("write");
+        std::fs::remove_file(dir.join("peg.stl")).expect("remove");
+        assert_eq!(
+            task.stale_meshes().expect("check"),
+            ["peg.stl", "block.stl"]
+        );
+        let no_geometry = Task::find("peg_in_hole_4dof").expect("task");
+        let e = no_geometry
+            .write_meshes()
+            .expect_err("no [geometry]")
+            .to_string();
+        assert!(
+            e.contains("no [geometry]") && e.contains("task.toml"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(dir).ok();
+    }
+}
