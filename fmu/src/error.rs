@@ -17,7 +17,7 @@ pub enum FusionError {
         /// The allowed range, e.g. `[10, 1000000]`.
         range: String,
     },
-    /// The map file is missing, unreadable or corrupt.
+    /// The map cannot be used: not found, or unfit for the filter (no DOF, NaN cells).
     #[error("map {}: {reason}", path.display())]
     Map {
         /// The file.
@@ -25,7 +25,10 @@ pub enum FusionError {
         /// What is wrong.
         reason: String,
     },
-    /// The vision model file is missing, unreadable or invalid.
+    /// The map file could not be read (the map library's error names the file and why).
+    #[error("map file unreadable")]
+    MapFile(#[source] ftmap::MapError),
+    /// The vision model file is not found.
     #[error("vision model {}: {reason}", path.display())]
     Vision {
         /// The file.
@@ -33,6 +36,10 @@ pub enum FusionError {
         /// What is wrong.
         reason: String,
     },
+    /// The vision model file could not be read (the map library's error names the file
+    /// and why).
+    #[error("vision model file unreadable")]
+    VisionFile(#[source] ftmap::MapError),
     /// A measurement with NaN or infinite values.
     #[error("input `{name}` is {value}: measurement skipped")]
     NonFinite {
@@ -58,6 +65,21 @@ pub enum FusionError {
     /// An FMI function this FMU does not provide.
     #[error("{0} is not supported by FtFusion")]
     Unsupported(&'static str),
+}
+
+/// The error and its chain of sources as one line, each cause once: what the FMU logs.
+pub fn report(e: &dyn std::error::Error) -> String {
+    let mut line = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        let text = c.to_string();
+        // Some errors repeat their source in their own message: say it once.
+        if !line.contains(&text) {
+            line = format!("{line}: {text}");
+        }
+        cause = c.source();
+    }
+    line
 }
 
 /// Result with [`FusionError`].

@@ -5,8 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use ftmap::{Axis, Dof, MapError, Pose};
-use model_description::{Causality, VARIABLES, VarType};
+use model_description::{self as md, Causality, VARIABLES, VarType};
 
 use crate::error::{FusionError, Result};
 use crate::filter::{Filter, Measurement, Reader, VisionMeasurement, VisionSense, Writer};
@@ -162,21 +161,18 @@ struct Io {
 
 impl Io {
     fn new() -> Self {
-        let dof = |i| Dof::from_index(i).unwrap_or(Dof::new(Pose::Grip, Axis::X));
+        // Full DOF index order: grip x .. rz, then object x .. rz (ftmap's `Dof::index`).
+        let full = |grip: [&str; 6], object: [&str; 6]| {
+            std::array::from_fn(|i| index_of(if i < 6 { grip[i] } else { object[i - 6] }))
+        };
         Self {
-            wrench: ["fx", "fy", "fz", "tx", "ty", "tz"].map(|c| index_of(&format!("wrench.{c}"))),
-            tcp: ["x", "y", "z", "rx", "ry", "rz"].map(|c| index_of(&format!("tcp.{c}"))),
-            contact: index_of("contact"),
-            vision: [
-                "left_distance",
-                "right_distance",
-                "passive_left",
-                "passive_right",
-            ]
-            .map(|c| index_of(&format!("vision.{c}"))),
-            vision_valid: index_of("vision.valid"),
-            pose: std::array::from_fn(|i| index_of(&dof(i).to_string())),
-            std: std::array::from_fn(|i| index_of(&format!("{}_std", dof(i)))),
+            wrench: md::WRENCH.map(index_of),
+            tcp: md::TCP.map(index_of),
+            contact: index_of(md::CONTACT),
+            vision: md::VISION_FEATURES.map(index_of),
+            vision_valid: index_of(md::VISION_VALID),
+            pose: full(md::GRIP, md::OBJECT),
+            std: full(md::GRIP_STD, md::OBJECT_STD),
             confidence: index_of("confidence"),
             converged: index_of("converged"),
             ess: index_of("ess"),
@@ -277,14 +273,16 @@ impl Instance {
                     e,
                     FusionError::Parameter { .. }
                         | FusionError::Map { .. }
+                        | FusionError::MapFile(_)
                         | FusionError::Vision { .. }
+                        | FusionError::VisionFile(_)
                 ) {
                     self.mode = Mode::Error;
                 }
                 self.log(
                     Status::Error,
                     "logStatusError",
-                    &format!("{}: {e}", call.name()),
+                    &format!("{}: {}", call.name(), crate::error::report(&e)),
                 );
                 Status::Error
             }
@@ -351,24 +349,12 @@ impl Instance {
         let path = self
             .resource_path(&params.map)
             .map_err(|(path, reason)| FusionError::Map { path, reason })?;
-        let map = ftmap::map::format::load(&path).map_err(|e| FusionError::Map {
-            path: path.clone(),
-            reason: match e {
-                MapError::Io { source, .. } => source.to_string(),
-                other => other.to_string(),
-            },
-        })?;
+        let map = ftmap::map::format::load(&path).map_err(FusionError::MapFile)?;
         let mut filter = Filter::new(&map, &path, params.config)?;
         if let Some(name) = &params.vision {
             let vision_err = |(path, reason)| FusionError::Vision { path, reason };
             let file = self.resource_path(name).map_err(vision_err)?;
-            let model = ftmap::vision::VisionModel::load(&file).map_err(|e| match e {
-                MapError::Vision { path, reason } => FusionError::Vision { path, reason },
-                other => FusionError::Vision {
-                    path: file.clone(),
-                    reason: other.to_string(),
-                },
-            })?;
+            let model = ftmap::vision::VisionModel::load(&file).map_err(FusionError::VisionFile)?;
             let sense = VisionSense::new(
                 model,
                 params.vision_method,

@@ -1,11 +1,4 @@
-//! FtFusion: the condensation particle filter of "Multi Sensor Fusion in Robot Assembly
-//! Using Particle Filters" (section IV, Algorithm 1, Eq. 3) over an FT-Map, and the FMI 2.0
-//! Co-Simulation export layer that makes it `FtFusion.fmu`.
-//!
-//! Layers, outermost first: [`fmi2`] (the 34 exported C functions, all `unsafe` FFI of the
-//! crate), [`instance`] (the FMU instance: state machine, variable store, state
-//! snapshots), [`params`] (parameters checked against the variable table), [`filter`]
-//! (the estimator, no FMI types).
+#![doc = include_str!("../README.md")]
 
 pub mod error;
 pub mod filter;

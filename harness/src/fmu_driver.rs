@@ -9,6 +9,8 @@ use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
 use fmi::traits::FmiImport;
 
+use model_description as md;
+
 use crate::error::{HarnessError, Result};
 use crate::vision::Features;
 
@@ -102,6 +104,15 @@ fn fmi_err(what: impl Into<String>) -> impl FnOnce(fmi::fmi2::Fmi2Error) -> Harn
     }
 }
 
+/// The value references of a named group of variables, in the group's order.
+fn group<const N: usize>(names: [&str; N], vr: impl Fn(&str) -> Result<u32>) -> Result<[u32; N]> {
+    let mut refs = [0; N];
+    for (r, name) in refs.iter_mut().zip(names) {
+        *r = vr(name)?;
+    }
+    Ok(refs)
+}
+
 impl Fmu {
     /// Loads the FMU at `path`.
     ///
@@ -127,19 +138,12 @@ impl Fmu {
                     reason: e.to_string(),
                 })
         };
-        let each = |prefix: &str, names: [&str; 6]| -> Result<[u32; 6]> {
-            let mut out = [0; 6];
-            for (o, n) in out.iter_mut().zip(names) {
-                *o = vr(&format!("{prefix}.{n}"))?;
-            }
-            Ok(out)
-        };
         let refs = Refs {
-            wrench: each("wrench", ["fx", "fy", "fz", "tx", "ty", "tz"])?,
-            tcp: each("tcp", ["x", "y", "z", "rx", "ry", "rz"])?,
-            contact: vr("contact")?,
-            object: [vr("object.x")?, vr("object.y")?],
-            std: [vr("object.x_std")?, vr("object.y_std")?],
+            wrench: group(md::WRENCH, vr)?,
+            tcp: group(md::TCP, vr)?,
+            contact: vr(md::CONTACT)?,
+            object: [vr(md::OBJECT[0])?, vr(md::OBJECT[1])?],
+            std: [vr(md::OBJECT_STD[0])?, vr(md::OBJECT_STD[1])?],
             reals: [vr("confidence")?, vr("ess")?],
             ints: [vr("measurements")?, vr("clusters")?],
             converged: vr("converged")?,
@@ -152,13 +156,8 @@ impl Fmu {
             vision: vr("vision")?,
             sigma_vision: vr("sigma_vision")?,
             vision_method: vr("vision_method")?,
-            features: [
-                vr("vision.left_distance")?,
-                vr("vision.right_distance")?,
-                vr("vision.passive_left")?,
-                vr("vision.passive_right")?,
-            ],
-            vision_valid: vr("vision.valid")?,
+            features: group(md::VISION_FEATURES, vr)?,
+            vision_valid: vr(md::VISION_VALID)?,
         };
         Ok(Self {
             import,

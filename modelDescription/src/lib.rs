@@ -1,14 +1,17 @@
-//! The interface of `FtFusion.fmu` (FMI 2.0 Co-Simulation), written once: the variable
-//! table (names, value references, causality, variability, start values, units, ranges),
-//! the GUID derived from it, and the writer of `modelDescription.xml`. The FMU dispatches
-//! its get/set calls through [`VARIABLES`]; the packager writes [`xml()`].
+#![doc = include_str!("../README.md")]
+//!
+//! The FMU dispatches its get/set calls through [`VARIABLES`]; the packager writes
+//! [`xml()`]; the FMU, its tests and the harness's FMI driver take the names of the
+//! variables that belong together from the groups ([`WRENCH`], [`TCP`], [`CONTACT`],
+//! [`VISION_FEATURES`], [`VISION_VALID`], [`OBJECT`], [`GRIP`] and their spreads).
 
 mod table;
 mod xml;
 
 pub use table::{
-    Causality, Initial, Start, VARIABLES, VISION_INPUT_VRS, VISION_PARAMETER_VRS, VarType,
-    Variability, Variable, by_name, by_vr,
+    CONTACT, Causality, GRIP, GRIP_STD, Initial, OBJECT, OBJECT_STD, Start, TCP, VARIABLES,
+    VISION_FEATURES, VISION_INPUT_VRS, VISION_PARAMETER_VRS, VISION_VALID, VarType, Variability,
+    Variable, WRENCH, by_name, by_vr,
 };
 pub use xml::{guid, xml};
 

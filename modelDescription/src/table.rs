@@ -3,6 +3,11 @@
 //!
 //! Value references: parameters 1xx, inputs 2xx, outputs 3xx. Vision parameters and
 //! feature inputs take the ranges [`VISION_PARAMETER_VRS`] and [`VISION_INPUT_VRS`].
+//!
+//! The variables that belong together (the wrench, the TCP pose, the vision features, the
+//! estimate and its spread) are named once here as groups, in the order the filter and the
+//! harness use them, as the Reference FMUs' `config.h` enumerates its value references; the
+//! table is written from the groups, and the FMU and its drivers take the names from them.
 
 use std::ops::Range;
 
@@ -68,7 +73,7 @@ pub enum Start {
 /// One FMU variable with all its attributes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Variable {
-    /// Exact name as in DESIGN.md (`wrench.fx`, `object.x_std`, ...).
+    /// Exact name (`wrench.fx`, `object.x_std`, ...), as docs/fmu.md lists it.
     pub name: &'static str,
     /// Value reference, unique over all types.
     pub vr: u32,
@@ -91,6 +96,62 @@ pub struct Variable {
     /// One line for the user.
     pub description: &'static str,
 }
+
+/// The measured wrench inputs: fx, fy, fz (N), tx, ty, tz (N.m) about the sensor origin.
+pub const WRENCH: [&str; 6] = [
+    "wrench.fx",
+    "wrench.fy",
+    "wrench.fz",
+    "wrench.tx",
+    "wrench.ty",
+    "wrench.tz",
+];
+/// The TCP pose inputs: x, y, z (m), rx, ry, rz (rad) of the task frame relative to the
+/// nominal goal frame.
+pub const TCP: [&str; 6] = ["tcp.x", "tcp.y", "tcp.z", "tcp.rx", "tcp.ry", "tcp.rz"];
+/// The input flag whose rising edge takes the wrench as a contact measurement.
+pub const CONTACT: &str = "contact";
+/// The vision feature inputs (px): the left and right distances from the active part's
+/// edge to the passive part's, then the passive part's left and right columns.
+pub const VISION_FEATURES: [&str; 4] = [
+    "vision.left_distance",
+    "vision.right_distance",
+    "vision.passive_left",
+    "vision.passive_right",
+];
+/// The input flag saying the vision inputs hold a detection.
+pub const VISION_VALID: &str = "vision.valid";
+/// The estimated grip offset outputs, x .. rz.
+pub const GRIP: [&str; 6] = [
+    "grip.x", "grip.y", "grip.z", "grip.rx", "grip.ry", "grip.rz",
+];
+/// The estimated object pose outputs, x .. rz: commanding `tcp := object` mates the parts.
+pub const OBJECT: [&str; 6] = [
+    "object.x",
+    "object.y",
+    "object.z",
+    "object.rx",
+    "object.ry",
+    "object.rz",
+];
+/// The spread outputs of the grip offset, in the order of [`GRIP`].
+pub const GRIP_STD: [&str; 6] = [
+    "grip.x_std",
+    "grip.y_std",
+    "grip.z_std",
+    "grip.rx_std",
+    "grip.ry_std",
+    "grip.rz_std",
+];
+/// The spread outputs of the object pose, in the order of [`OBJECT`].
+pub const OBJECT_STD: [&str; 6] = [
+    "object.x_std",
+    "object.y_std",
+    "object.z_std",
+    "object.rx_std",
+    "object.ry_std",
+    "object.rz_std",
+];
 
 /// Value references of the vision parameters (`vision`, `sigma_vision`, ...).
 pub const VISION_PARAMETER_VRS: Range<u32> = 150..200;
@@ -301,79 +362,69 @@ pub const VARIABLES: &[Variable] = &[
     ),
     // ---- Inputs (2xx) -------------------------------------------------------------------
     input(
-        "wrench.fx",
+        WRENCH[0],
         200,
         "N",
         "Measured force x in the sensor (= nominal task) frame",
     ),
+    input(WRENCH[1], 201, "N", "Measured force y in the sensor frame"),
+    input(WRENCH[2], 202, "N", "Measured force z in the sensor frame"),
     input(
-        "wrench.fy",
-        201,
-        "N",
-        "Measured force y in the sensor frame",
-    ),
-    input(
-        "wrench.fz",
-        202,
-        "N",
-        "Measured force z in the sensor frame",
-    ),
-    input(
-        "wrench.tx",
+        WRENCH[3],
         203,
         "N.m",
         "Measured torque x about the sensor origin",
     ),
     input(
-        "wrench.ty",
+        WRENCH[4],
         204,
         "N.m",
         "Measured torque y about the sensor origin",
     ),
     input(
-        "wrench.tz",
+        WRENCH[5],
         205,
         "N.m",
         "Measured torque z about the sensor origin",
     ),
     input(
-        "tcp.x",
+        TCP[0],
         206,
         "m",
         "Task frame relative to the nominal goal frame: x",
     ),
     input(
-        "tcp.y",
+        TCP[1],
         207,
         "m",
         "Task frame relative to the nominal goal frame: y",
     ),
     input(
-        "tcp.z",
+        TCP[2],
         208,
         "m",
         "Task frame relative to the nominal goal frame: z (at contact: the contact height)",
     ),
     input(
-        "tcp.rx",
+        TCP[3],
         209,
         "rad",
         "Task frame relative to the nominal goal frame: rotation-vector x",
     ),
     input(
-        "tcp.ry",
+        TCP[4],
         210,
         "rad",
         "Task frame relative to the nominal goal frame: rotation-vector y",
     ),
     input(
-        "tcp.rz",
+        TCP[5],
         211,
         "rad",
         "Task frame relative to the nominal goal frame: rotation-vector z",
     ),
     Variable {
-        name: "contact",
+        name: CONTACT,
         vr: 212,
         causality: Causality::Input,
         variability: Variability::Discrete,
@@ -387,32 +438,32 @@ pub const VARIABLES: &[Variable] = &[
     },
     // ---- Vision feature inputs (reserved: VISION_INPUT_VRS, 250..299) -------------------
     input(
-        "vision.left_distance",
+        VISION_FEATURES[0],
         250,
         "px",
         "Detected distance along u, at the image's centre row, from the active part's left \
          edge to the passive part's left edge",
     ),
     input(
-        "vision.right_distance",
+        VISION_FEATURES[1],
         251,
         "px",
         "Detected distance along u from the active part's right edge to the passive part's right edge",
     ),
     input(
-        "vision.passive_left",
+        VISION_FEATURES[2],
         252,
         "px",
         "Detected column (u) of the passive part's left edge at the centre row (vision_method 1)",
     ),
     input(
-        "vision.passive_right",
+        VISION_FEATURES[3],
         253,
         "px",
         "Detected column (u) of the passive part's right edge at the centre row (vision_method 1)",
     ),
     Variable {
-        name: "vision.valid",
+        name: VISION_VALID,
         vr: 254,
         causality: Causality::Input,
         variability: Variability::Discrete,
@@ -427,132 +478,132 @@ pub const VARIABLES: &[Variable] = &[
     },
     // ---- Outputs (3xx) ------------------------------------------------------------------
     output(
-        "object.x",
+        OBJECT[0],
         300,
         Real,
         "m",
         "Estimated mating-part frame relative to the nominal goal: x",
     ),
     output(
-        "object.y",
+        OBJECT[1],
         301,
         Real,
         "m",
         "Estimated mating-part frame relative to the nominal goal: y",
     ),
     output(
-        "object.z",
+        OBJECT[2],
         302,
         Real,
         "m",
         "Estimated mating-part frame relative to the nominal goal: z",
     ),
     output(
-        "object.rx",
+        OBJECT[3],
         303,
         Real,
         "rad",
         "Estimated mating-part frame relative to the nominal goal: rx",
     ),
     output(
-        "object.ry",
+        OBJECT[4],
         304,
         Real,
         "rad",
         "Estimated mating-part frame relative to the nominal goal: ry",
     ),
     output(
-        "object.rz",
+        OBJECT[5],
         305,
         Real,
         "rad",
         "Estimated mating-part frame relative to the nominal goal: rz",
     ),
-    output("grip.x", 306, Real, "m", "Estimated grip offset: x"),
-    output("grip.y", 307, Real, "m", "Estimated grip offset: y"),
-    output("grip.z", 308, Real, "m", "Estimated grip offset: z"),
-    output("grip.rx", 309, Real, "rad", "Estimated grip offset: rx"),
-    output("grip.ry", 310, Real, "rad", "Estimated grip offset: ry"),
-    output("grip.rz", 311, Real, "rad", "Estimated grip offset: rz"),
+    output(GRIP[0], 306, Real, "m", "Estimated grip offset: x"),
+    output(GRIP[1], 307, Real, "m", "Estimated grip offset: y"),
+    output(GRIP[2], 308, Real, "m", "Estimated grip offset: z"),
+    output(GRIP[3], 309, Real, "rad", "Estimated grip offset: rx"),
+    output(GRIP[4], 310, Real, "rad", "Estimated grip offset: ry"),
+    output(GRIP[5], 311, Real, "rad", "Estimated grip offset: rz"),
     output(
-        "object.x_std",
+        OBJECT_STD[0],
         312,
         Real,
         "m",
         "Spread (weighted standard deviation) of the dominant cluster: object.x",
     ),
     output(
-        "object.y_std",
+        OBJECT_STD[1],
         313,
         Real,
         "m",
         "Spread of the dominant cluster: object.y",
     ),
     output(
-        "object.z_std",
+        OBJECT_STD[2],
         314,
         Real,
         "m",
         "Spread of the dominant cluster: object.z",
     ),
     output(
-        "object.rx_std",
+        OBJECT_STD[3],
         315,
         Real,
         "rad",
         "Spread of the dominant cluster: object.rx",
     ),
     output(
-        "object.ry_std",
+        OBJECT_STD[4],
         316,
         Real,
         "rad",
         "Spread of the dominant cluster: object.ry",
     ),
     output(
-        "object.rz_std",
+        OBJECT_STD[5],
         317,
         Real,
         "rad",
         "Spread of the dominant cluster: object.rz",
     ),
     output(
-        "grip.x_std",
+        GRIP_STD[0],
         318,
         Real,
         "m",
         "Spread of the dominant cluster: grip.x",
     ),
     output(
-        "grip.y_std",
+        GRIP_STD[1],
         319,
         Real,
         "m",
         "Spread of the dominant cluster: grip.y",
     ),
     output(
-        "grip.z_std",
+        GRIP_STD[2],
         320,
         Real,
         "m",
         "Spread of the dominant cluster: grip.z",
     ),
     output(
-        "grip.rx_std",
+        GRIP_STD[3],
         321,
         Real,
         "rad",
         "Spread of the dominant cluster: grip.rx",
     ),
     output(
-        "grip.ry_std",
+        GRIP_STD[4],
         322,
         Real,
         "rad",
         "Spread of the dominant cluster: grip.ry",
     ),
     output(
-        "grip.rz_std",
+        GRIP_STD[5],
         323,
         Real,
         "rad",
@@ -602,6 +653,52 @@ pub fn by_name(name: &str) -> Option<&'static Variable> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_group_names_table_variables_of_its_kind() {
+        let kind = |name: &str| {
+            let v = by_name(name).unwrap_or_else(|| panic!("{name} is not in the table"));
+            (v.causality, v.ty)
+        };
+        let real_in = (Causality::Input, VarType::Real);
+        let bool_in = (Causality::Input, VarType::Boolean);
+        let real_out = (Causality::Output, VarType::Real);
+        for name in WRENCH.iter().chain(&TCP).chain(&VISION_FEATURES) {
+            assert_eq!(kind(name), real_in, "{name}");
+        }
+        for name in [CONTACT, VISION_VALID] {
+            assert_eq!(kind(name), bool_in, "{name}");
+        }
+        for name in GRIP
+            .iter()
+            .chain(&OBJECT)
+            .chain(&GRIP_STD)
+            .chain(&OBJECT_STD)
+        {
+            assert_eq!(kind(name), real_out, "{name}");
+        }
+        // Spreads follow their estimates, value references in the same order.
+        for (est, std) in GRIP
+            .iter()
+            .chain(&OBJECT)
+            .zip(GRIP_STD.iter().chain(&OBJECT_STD))
+        {
+            assert_eq!(format!("{est}_std"), *std);
+        }
+        let vrs = |names: &[&str]| {
+            names
+                .iter()
+                .map(|n| by_name(n).map(|v| v.vr))
+                .collect::<Vec<_>>()
+        };
+        for group in [&WRENCH[..], &TCP, &OBJECT, &OBJECT_STD] {
+            let v = vrs(group);
+            assert!(
+                v.windows(2).all(|w| w[1] == w[0].map(|x| x + 1)),
+                "{group:?}: {v:?}"
+            );
+        }
+    }
 
     #[test]
     fn value_references_and_names_are_unique_and_grouped() {

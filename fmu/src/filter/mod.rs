@@ -212,44 +212,28 @@ impl Filter {
 
     /// Checks a measurement: every value finite.
     pub fn check(m: &Measurement) -> Result<()> {
-        const VISION: [&str; 4] = [
-            "vision.left_distance",
-            "vision.right_distance",
-            "vision.passive_left",
-            "vision.passive_right",
-        ];
         if let Some(v) = &m.vision
             && let Some((&value, name)) = v
                 .distances
                 .iter()
                 .chain(&v.passive)
-                .zip(VISION)
+                .zip(model_description::VISION_FEATURES)
                 .find(|(v, _)| !v.is_finite())
         {
             return Err(FusionError::NonFinite { name, value });
         }
-        const NAMES: [&str; 12] = [
-            "wrench.fx",
-            "wrench.fy",
-            "wrench.fz",
-            "wrench.tx",
-            "wrench.ty",
-            "wrench.tz",
-            "tcp.x",
-            "tcp.y",
-            "tcp.z",
-            "tcp.rx",
-            "tcp.ry",
-            "tcp.rz",
-        ];
         match m
             .wrench
             .iter()
             .chain(&m.tcp)
-            .zip(NAMES)
+            .zip(
+                model_description::WRENCH
+                    .iter()
+                    .chain(&model_description::TCP),
+            )
             .find(|(v, _)| !v.is_finite())
         {
-            Some((&value, name)) => Err(FusionError::NonFinite { name, value }),
+            Some((&value, &name)) => Err(FusionError::NonFinite { name, value }),
             None => Ok(()),
         }
     }

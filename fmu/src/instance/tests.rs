@@ -8,6 +8,20 @@ use std::rc::Rc;
 use super::*;
 use ftfusion_testkit::{field, peg_map};
 
+#[test]
+fn the_pose_outputs_are_named_after_the_maps_dofs() {
+    for i in 0..12 {
+        let dof = ftmap::Dof::from_index(i).expect("12 DOFs");
+        let (est, std) = if i < 6 {
+            (md::GRIP, md::GRIP_STD)
+        } else {
+            (md::OBJECT, md::OBJECT_STD)
+        };
+        assert_eq!(est[i % 6], dof.to_string());
+        assert_eq!(std[i % 6], format!("{dof}_std"));
+    }
+}
+
 /// A resources folder holding the synthetic map as `peg.ftmap` and a corrupt copy.
 fn resources() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("ftfusion-instance-{}", std::process::id()));
@@ -201,21 +215,18 @@ fn missing_and_corrupt_maps_fail_initialization_naming_the_file_and_the_problem(
         let (mut i, _) = instance();
         set_string(&mut i, "map", name).expect("parameter");
         i.enter_initialization_mode().expect("allowed");
-        let e = i
-            .exit_initialization_mode()
-            .expect_err("bad map")
-            .to_string();
-        assert!(e.contains(name) && e.contains(problem), "{e}");
+        let e = i.exit_initialization_mode().expect_err("bad map");
+        // The map library's error is kept as the source, and the logged line says it all.
+        assert!(matches!(e, FusionError::MapFile(_)), "{e}");
+        assert!(std::error::Error::source(&e).is_some(), "{e}");
+        let line = crate::error::report(&e);
+        assert!(line.contains(name) && line.contains(problem), "{line}");
     }
     let (mut i, _) = instance();
     set_string(&mut i, "map", "/does/not/exist.ftmap").expect("parameter");
     i.enter_initialization_mode().expect("allowed");
-    assert!(
-        i.exit_initialization_mode()
-            .expect_err("bad map")
-            .to_string()
-            .contains("/does/not/exist.ftmap")
-    );
+    let e = i.exit_initialization_mode().expect_err("bad map");
+    assert!(crate::error::report(&e).contains("/does/not/exist.ftmap"));
 }
 
 #[test]
@@ -310,9 +321,9 @@ fn missing_and_broken_vision_models_fail_initialization_naming_the_file() {
         set_string(&mut i, "vision", name).expect("parameter");
         i.enter_initialization_mode().expect("allowed");
         let e = i.exit_initialization_mode().expect_err("bad vision model");
-        assert!(matches!(e, FusionError::Vision { .. }), "{e}");
-        let e = e.to_string();
-        assert!(e.contains(name) && e.contains(problem), "{e}");
+        assert!(matches!(e, FusionError::VisionFile(_)), "{e}");
+        let line = crate::error::report(&e);
+        assert!(line.contains(name) && line.contains(problem), "{line}");
     }
 }
 
