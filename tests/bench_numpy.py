@@ -1,4 +1,4 @@
-"""The filter update of ftfusion-bench written with vectorised NumPy, as a FilterPy user
+"""The filter update of the ftfusion filter benchmark (fmu/benches/filter.rs) written with vectorised NumPy, as a FilterPy user
 would: same map size (4-DOF peg field, 826,281 cells), particles and iterations; prints
 `numpy_updates_per_s = X`. Options: --particles N, --iterations K, --measurements M."""
 

@@ -216,7 +216,10 @@ impl Task {
             path: path.to_owned(),
             reason,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        let text = std::fs::read_to_string(path).map_err(|source| MapError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
         let file: TaskFile = toml::from_str(&text).map_err(|e| err(e.to_string()))?;
         // The optional tables are read on their own, so that an error names its table.
         fn table<T: serde::de::DeserializeOwned>(

@@ -237,7 +237,10 @@ impl VisionModel {
             path: path.to_owned(),
             reason,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
+        let text = std::fs::read_to_string(path).map_err(|source| MapError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
         let file: VisionFile =
             serde_json::from_str(&text).map_err(|e| bad(format!("not a vision model: {e}")))?;
         if file.kind != VISION_KIND {
