@@ -11,7 +11,7 @@ use std::path::Path;
 use mujoco_rs::prelude::*;
 use mujoco_rs::renderer::{MjRenderer, png};
 
-use crate::error::{HarnessError, Result};
+use crate::error::{HarnessError, Result, create_parent};
 use crate::scene::{APPROACH_CLEARANCE, SceneSpec};
 
 pub use ftmap::vision::Camera;
@@ -102,9 +102,7 @@ impl RgbImage {
     /// # Errors
     /// When the file cannot be written.
     pub fn save_png(&self, path: &Path) -> Result<()> {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| HarnessError::io(dir, e))?;
-        }
+        create_parent(path)?;
         let file = std::fs::File::create(path).map_err(|e| HarnessError::io(path, e))?;
         let mut enc = png::Encoder::new(
             std::io::BufWriter::new(file),
@@ -113,10 +111,7 @@ impl RgbImage {
         );
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        let fail = |e: png::EncodingError| HarnessError::Plot {
-            path: path.to_owned(),
-            reason: e.to_string(),
-        };
+        let fail = |e: png::EncodingError| HarnessError::plot(path, e);
         let mut w = enc.write_header().map_err(fail)?;
         w.write_image_data(&self.data).map_err(fail)?;
         w.finish().map_err(fail)
@@ -145,9 +140,9 @@ impl CameraScene {
     /// When MuJoCo refuses the scene or the camera, the joints or part B are missing.
     pub fn load(scene: &Path, spec: SceneSpec) -> Result<Self> {
         crate::runtime::check_mujoco()?;
-        let model = MjModel::from_xml(scene).map_err(|e| HarnessError::Scene {
+        let model = MjModel::from_xml(scene).map_err(|source| HarnessError::SceneLoad {
             path: scene.to_owned(),
-            reason: e.to_string(),
+            source,
         })?;
         Self::with_model(model, spec)
     }
@@ -158,9 +153,9 @@ impl CameraScene {
     /// As [`CameraScene::load`].
     pub fn from_xml_string(xml: &str, spec: SceneSpec) -> Result<Self> {
         crate::runtime::check_mujoco()?;
-        let model = MjModel::from_xml_string(xml).map_err(|e| HarnessError::Scene {
+        let model = MjModel::from_xml_string(xml).map_err(|source| HarnessError::SceneLoad {
             path: "<string>".into(),
-            reason: e.to_string(),
+            source,
         })?;
         Self::with_model(model, spec)
     }
@@ -234,22 +229,15 @@ impl CameraScene {
     /// # Errors
     /// When no OpenGL context can be made (no EGL device) or rendering fails.
     pub fn render(&mut self) -> Result<RgbImage> {
-        let fail = |e: mujoco_rs::renderer::RendererError| HarnessError::Scene {
-            path: "<render>".into(),
-            reason: format!("offscreen rendering: {e:?}"),
-        };
-        if self.renderer.is_none() {
-            let r = MjRenderer::builder()
-                .camera(MjvCamera::new_fixed(self.cam))
-                .build(self.data.model())
-                .map_err(fail)?;
-            self.renderer = Some(r);
-        }
-        let Some(r) = self.renderer.as_mut() else {
-            return Err(HarnessError::Scene {
-                path: "<render>".into(),
-                reason: "no renderer".into(),
-            });
+        let fail = |source| HarnessError::Render { source };
+        let r = match self.renderer.as_mut() {
+            Some(r) => r,
+            None => self.renderer.insert(
+                MjRenderer::builder()
+                    .camera(MjvCamera::new_fixed(self.cam))
+                    .build(self.data.model())
+                    .map_err(fail)?,
+            ),
         };
         r.sync_data(&mut self.data).map_err(fail)?;
         r.render().map_err(fail)?;

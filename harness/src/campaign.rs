@@ -1,19 +1,444 @@
-//! Trial campaigns: random true offsets (or a grid of them), one trial each, with a
-//! progress bar; the table of trials (CSV), a summary (JSON and a readable table).
+//! Trial campaigns: the options a campaign runs with, setting it up (the task and its
+//! simulation, the FT-Map handed to the FMU, the trial limits, the camera, the FMU), random
+//! true offsets (or a grid of them), one trial each with a progress bar, and its report
+//! (`trials.csv`, `summary.json`, a plot).
 
-use std::path::Path;
+use std::fmt;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
-use serde::Serialize;
 
-use crate::error::{HarnessError, Result};
+use ftmap::Task;
+use ftmap::task::cad::Geometry;
+
+use crate::error::{HarnessError, Result, create_dir};
 use crate::eye::Eye;
-use crate::fmu_driver::Fmu;
-use crate::sim::Sim;
-use crate::trial::{Strategy, TrialConfig, TrialResult, run_trial};
+use crate::fmu_driver::{Fmu, Settings, default_fmu_path};
+use crate::plot;
+use crate::report::{self, Summary};
+use crate::sensor::Noise;
+use crate::sim::{Sim, open_task};
+use crate::trial::{Strategy, TrialConfig, TrialResult, run_trial, spiral};
+use crate::vision::Detector;
+
+/// How the FMU evaluates particles by vision (its `vision_method` parameter).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum VisionMethod {
+    /// Relative feature distances (section III-B-1).
+    Relative,
+    /// Camera recalibration on the passive part (section III-B-2).
+    #[default]
+    Recalibration,
+}
+
+impl VisionMethod {
+    /// The value of the FMU's `vision_method` parameter.
+    pub fn parameter(self) -> i32 {
+        match self {
+            Self::Relative => 0,
+            Self::Recalibration => 1,
+        }
+    }
+}
+
+/// The true offsets of a campaign's trials.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Offsets {
+    /// `trials` offsets uniform in the square ±`half_width` (m; default Omega's size_trans).
+    Random {
+        /// Number of trials.
+        trials: usize,
+        /// Half width of the square (m).
+        half_width: Option<f64>,
+    },
+    /// A `points` x `points` grid over the square ±`half_width` (the paper's Fig. 10).
+    Grid {
+        /// Grid points per axis.
+        points: usize,
+        /// Half width of the grid (m; default Omega's size_trans).
+        half_width: Option<f64>,
+    },
+}
+
+/// What a campaign runs with (the `trials` and `sweep` commands' settings, SI units).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CampaignOptions {
+    /// Task name or task.toml path.
+    pub task: String,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Seed of the offsets, the sensor noise and the FMU.
+    pub seed: u64,
+    /// The true offsets.
+    pub offsets: Offsets,
+    /// FT-Map for the FMU (default: the FMU's embedded map for peg_in_hole, else the task's
+    /// map computed from its CAD meshes and cached in target/maps/).
+    pub map: Option<PathBuf>,
+    /// Fuse the camera with the F/T sensor (experiment D).
+    pub vision: bool,
+    /// How the FMU evaluates particles by vision.
+    pub vision_method: VisionMethod,
+    /// FMU parameter `sigma_vision` (px).
+    pub sigma_vision: Option<f64>,
+    /// Gaussian image noise (grey levels) added to each rendered image.
+    pub image_noise: f64,
+    /// Line detector for the camera's edges.
+    pub detector: Detector,
+    /// How the next contact point is chosen.
+    pub strategy: Strategy,
+    /// Gaussian F/T sensor noise ([`Noise::TYPICAL`]) on or off.
+    pub sensor_noise: bool,
+    /// The FMU (default: [`default_fmu_path`]).
+    pub fmu: Option<PathBuf>,
+    /// Most contact motions per trial (default: 30 for pf; enough to cover Omega for spiral).
+    pub max_contacts: Option<usize>,
+    /// Most simulated time per trial (s; default: 0.3 s per allowed contact).
+    pub max_sim_time: Option<f64>,
+    /// FMU parameter `particles`.
+    pub particles: Option<i32>,
+    /// FMU parameter `iterations`.
+    pub iterations: Option<i32>,
+    /// FMU parameter `sigma_torque` (N m).
+    pub sigma_torque: Option<f64>,
+}
+
+/// What setting a campaign up did that its user should hear of, in order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SetupNote {
+    /// The task's FT-Map from the cache (`computed: None`) or computed from its CAD meshes
+    /// in `computed` seconds.
+    Map {
+        /// The map file.
+        path: PathBuf,
+        /// Seconds the computation took, when the map was not cached.
+        computed: Option<f64>,
+    },
+    /// The camera's vision model, written for the FMU.
+    VisionModel(PathBuf),
+}
+
+impl fmt::Display for SetupNote {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Map {
+                path,
+                computed: Some(s),
+            } => write!(
+                f,
+                "map {} (computed from the CAD meshes in {s:.1} s)",
+                path.display()
+            ),
+            Self::Map {
+                path,
+                computed: None,
+            } => write!(f, "map {} (cached)", path.display()),
+            Self::VisionModel(path) => write!(
+                f,
+                "vision model {} (camera as MuJoCo places it)",
+                path.display()
+            ),
+        }
+    }
+}
+
+/// The trials a campaign ran and the wall-clock time they took (s).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    /// One result per true offset.
+    pub results: Vec<TrialResult>,
+    /// Wall-clock time of the whole campaign (s).
+    pub wall: f64,
+}
+
+/// A plot a campaign wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CampaignPlot {
+    /// `estimates.png`: one trial's estimate and spread after its first measurements.
+    Estimates {
+        /// The image file.
+        path: PathBuf,
+        /// The trial shown.
+        trial: usize,
+    },
+    /// `sweep.png`: contacts per true offset.
+    Sweep {
+        /// The image file.
+        path: PathBuf,
+    },
+}
+
+impl fmt::Display for CampaignPlot {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Estimates { path, trial } => write!(
+                f,
+                "plot {} (trial {trial}: estimate and 1/2-sigma ellipse after its first three measurements; the FMU exposes no particles)",
+                path.display()
+            ),
+            Self::Sweep { path } => write!(f, "plot {}", path.display()),
+        }
+    }
+}
+
+/// A campaign set up and ready to run: the task, its simulation, the trial limits and
+/// settings, the camera and the FMU.
+pub struct Campaign {
+    options: CampaignOptions,
+    task: Task,
+    sim: Sim,
+    config: TrialConfig,
+    eye: Option<Eye>,
+    fmu: Option<Fmu>,
+}
+
+impl Campaign {
+    /// Sets a campaign up: opens the task and its scene, resolves the FT-Map, builds the
+    /// trial limits, opens the camera (writing `<out>/vision.json`) and loads the FMU,
+    /// telling `note` what a user should hear of as it goes.
+    ///
+    /// # Errors
+    /// When the task, its scene, map, camera or the FMU cannot be had, or the camera is asked
+    /// for with the spiral search.
+    pub fn open(options: CampaignOptions, note: &mut dyn FnMut(SetupNote)) -> Result<Self> {
+        let (task, sim) = open_task(&options.task)?;
+        let map = resolve_map(options.map.as_deref(), &task, note)?;
+        let mut config = trial_config(&options, &task, map)?;
+        let eye = open_eye(&options, &task, &mut config, note)?;
+        let fmu = match options.strategy {
+            Strategy::Pf => {
+                let path = options.fmu.clone().unwrap_or_else(default_fmu_path);
+                Some(Fmu::load(&path)?)
+            }
+            Strategy::Spiral => None,
+        };
+        Ok(Self {
+            options,
+            task,
+            sim,
+            config,
+            eye,
+            fmu,
+        })
+    }
+
+    /// Half width of the square of true offsets (m).
+    fn half_width(&self) -> f64 {
+        let (Offsets::Random { half_width, .. } | Offsets::Grid { half_width, .. }) =
+            self.options.offsets;
+        half_width.unwrap_or(self.task.omega.size_trans)
+    }
+
+    /// The true offsets of the trials (m).
+    fn offsets(&self) -> Vec<[f64; 2]> {
+        let size = self.half_width();
+        match self.options.offsets {
+            Offsets::Random { trials, .. } => random_offsets(trials, size, self.options.seed),
+            Offsets::Grid { points, .. } => grid_offsets(points, size),
+        }
+    }
+
+    /// Runs one trial per true offset, with a progress bar.
+    ///
+    /// # Errors
+    /// When the FMU or rendering fails.
+    pub fn run(&mut self) -> Result<Outcome> {
+        let offsets = self.offsets();
+        let (results, wall) = timed(|| {
+            run_campaign(
+                &mut self.sim,
+                self.fmu.as_ref(),
+                self.eye.as_mut(),
+                &self.config,
+                &offsets,
+                self.options.seed,
+            )
+        });
+        Ok(Outcome {
+            results: results?,
+            wall,
+        })
+    }
+
+    /// Writes `<out>/trials.csv` and `<out>/summary.json`; returns the summary.
+    ///
+    /// # Errors
+    /// When the folder or a file cannot be written.
+    pub fn write_report(&self, outcome: &Outcome) -> Result<Summary> {
+        let out = &self.options.out;
+        create_dir(out)?;
+        report::write_trials_csv(&out.join("trials.csv"), &outcome.results)?;
+        let summary = report::summarize(
+            &self.task.name,
+            self.options.strategy,
+            self.options.sensor_noise,
+            self.options.vision,
+            &outcome.results,
+            outcome.wall,
+        );
+        report::write_summary(&out.join("summary.json"), &summary)?;
+        Ok(summary)
+    }
+
+    /// Draws the campaign's plot: for random offsets with the estimator, `estimates.png` of
+    /// the first trial that needed a second contact measurement (else the first trial); for
+    /// a grid, `sweep.png`. `None` when there is nothing to draw.
+    ///
+    /// # Errors
+    /// When the image cannot be written.
+    pub fn plot(&self, outcome: &Outcome) -> Result<Option<CampaignPlot>> {
+        let results = &outcome.results;
+        match self.options.offsets {
+            Offsets::Random { .. } if self.options.strategy == Strategy::Pf => {
+                let trial = results
+                    .iter()
+                    .position(|r| r.measurements() >= 2)
+                    .unwrap_or(0);
+                let Some(r) = results.get(trial) else {
+                    return Ok(None);
+                };
+                let path = self.options.out.join("estimates.png");
+                plot::estimates(&path, r, self.task.omega.size_trans)?;
+                Ok(Some(CampaignPlot::Estimates { path, trial }))
+            }
+            Offsets::Random { .. } => Ok(None),
+            Offsets::Grid { points, .. } => {
+                let size = self.half_width();
+                let cell = if points > 1 {
+                    2.0 * size / (points - 1) as f64
+                } else {
+                    2.0 * size
+                };
+                let path = self.options.out.join("sweep.png");
+                plot::sweep(&path, results, size, cell)?;
+                Ok(Some(CampaignPlot::Sweep { path }))
+            }
+        }
+    }
+}
+
+/// The FT-Map file for the FMU: the given one, none for peg_in_hole (the FMU's embedded
+/// map), else the task's map computed from its CAD meshes and cached in target/maps/.
+fn resolve_map(
+    map: Option<&Path>,
+    task: &Task,
+    note: &mut dyn FnMut(SetupNote),
+) -> Result<Option<PathBuf>> {
+    let map = match map {
+        Some(m) => Some(std::path::absolute(m).map_err(|e| HarnessError::io(m, e))?),
+        None if task.name == "peg_in_hole" => None,
+        None => {
+            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
+            let t0 = Instant::now();
+            let (path, computed) =
+                ftmap::generate::cached(task, &dir).map_err(|source| HarnessError::TaskMap {
+                    task: task.name.clone(),
+                    source,
+                })?;
+            note(SetupNote::Map {
+                path: path.clone(),
+                computed: computed.then(|| t0.elapsed().as_secs_f64()),
+            });
+            Some(path)
+        }
+    };
+    match map {
+        Some(m) if !m.is_file() => Err(HarnessError::MapMissing {
+            path: m,
+            task: task.name.clone(),
+        }),
+        map => Ok(map),
+    }
+}
+
+/// Radial clearance of a task's parts (m): the spiral's pitch stays below twice it.
+fn clearance(task: &Task) -> Result<f64> {
+    Ok(match *task.geometry()? {
+        Geometry::RoundPeg {
+            peg_radius,
+            hole_radius,
+            ..
+        } => hole_radius - peg_radius,
+        Geometry::OctagonPeg {
+            peg_across_flats,
+            hole_across_flats,
+            ..
+        } => (hole_across_flats - peg_across_flats) / 2.0,
+        Geometry::GearOnShaft {
+            bore_radius,
+            shaft_radius,
+            ..
+        } => bore_radius - shaft_radius,
+        Geometry::BearingHousing {
+            bore_radius,
+            seat_radius,
+            ..
+        } => bore_radius - seat_radius,
+    })
+}
+
+/// The trial limits and FMU settings of a campaign, with the FT-Map file `map`.
+fn trial_config(
+    options: &CampaignOptions,
+    task: &Task,
+    map: Option<PathBuf>,
+) -> Result<TrialConfig> {
+    let size = task.omega.size_trans;
+    let spiral_step = 1.6 * clearance(task)?;
+    let spiral_radius = size * 2f64.sqrt();
+    let spiral_points = spiral(spiral_step, spiral_radius).len();
+    let max_contacts = options.max_contacts.unwrap_or(match options.strategy {
+        Strategy::Pf => 30,
+        Strategy::Spiral => spiral_points,
+    });
+    Ok(TrialConfig {
+        strategy: options.strategy,
+        max_contacts,
+        max_sim_time: options.max_sim_time.unwrap_or(0.3 * max_contacts as f64),
+        noise: if options.sensor_noise {
+            Noise::TYPICAL
+        } else {
+            Noise::NONE
+        },
+        spiral_step,
+        spiral_radius,
+        settings: Settings {
+            map,
+            particles: options.particles,
+            iterations: options.iterations,
+            sigma_torque: options.sigma_torque,
+            sigma_vision: options.sigma_vision,
+            vision_method: Some(options.vision_method.parameter()),
+            ..Settings::default()
+        },
+    })
+}
+
+/// The camera, when the options ask for it: its vision model is written to
+/// `<out>/vision.json` and handed to the FMU through `config`.
+fn open_eye(
+    options: &CampaignOptions,
+    task: &Task,
+    config: &mut TrialConfig,
+    note: &mut dyn FnMut(SetupNote),
+) -> Result<Option<Eye>> {
+    if !options.vision {
+        return Ok(None);
+    }
+    if options.strategy != Strategy::Pf {
+        return Err(HarnessError::VisionNeedsEstimator);
+    }
+    let eye = Eye::open(task, options.image_noise, options.detector)?;
+    create_dir(&options.out)?;
+    let file = options.out.join("vision.json");
+    let path = std::path::absolute(&file).map_err(|e| HarnessError::io(file, e))?;
+    eye.model().save(&path)?;
+    note(SetupNote::VisionModel(path.clone()));
+    config.settings.vision = Some(path);
+    Ok(Some(eye))
+}
 
 /// True offsets uniform in the square ±`size` (m), from `seed`.
 pub fn random_offsets(n: usize, size: f64, seed: u64) -> Vec<[f64; 2]> {
@@ -74,323 +499,6 @@ pub fn run_campaign(
     }
     bar.finish();
     Ok(results)
-}
-
-/// Statistics of a count per trial.
-#[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct ContactStats {
-    /// Mean.
-    pub mean: f64,
-    /// Median.
-    pub median: f64,
-    /// 95th percentile (nearest rank).
-    pub p95: f64,
-    /// Maximum.
-    pub max: f64,
-}
-
-/// The summary of a campaign (`summary.json`).
-#[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct Summary {
-    /// Task name.
-    pub task: String,
-    /// Strategy.
-    pub strategy: Strategy,
-    /// Trials run.
-    pub trials: usize,
-    /// Fraction of trials that reached the goal depth.
-    pub success_rate: f64,
-    /// Contact motions per trial (all trials), the inserting one included.
-    pub contacts: ContactStats,
-    /// Contact measurements per trial: contact motions that did not insert the part.
-    pub measurements: ContactStats,
-    /// Mean `object.y_std` after the first contact measurement (m).
-    pub y_std_first_contact: f64,
-    /// Whether a camera took part (experiment D).
-    pub vision: bool,
-    /// Images in which not all four edges were found (all trials).
-    pub images_missed: usize,
-    /// Mean distance of the last approach point from the true offset (m).
-    pub final_error_mean: f64,
-    /// Largest such distance (m).
-    pub final_error_max: f64,
-    /// Trials per wall-clock second.
-    pub trials_per_second: f64,
-    /// Simulated time over wall-clock time spent in MuJoCo.
-    pub realtime_factor: f64,
-    /// Simulated time over the whole wall-clock time of the trials (FMU included).
-    pub realtime_factor_overall: f64,
-    /// Whether the sensor noise was on.
-    pub sensor_noise: bool,
-}
-
-impl ContactStats {
-    /// Mean, median, p95 and maximum of `values`.
-    pub fn of(mut values: Vec<f64>) -> Self {
-        values.sort_by(f64::total_cmp);
-        Self {
-            mean: values.iter().sum::<f64>() / values.len().max(1) as f64,
-            median: percentile(&values, 0.5),
-            p95: percentile(&values, 0.95),
-            max: values.last().copied().unwrap_or(f64::NAN),
-        }
-    }
-}
-
-fn percentile(sorted: &[f64], q: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
-    sorted[rank - 1]
-}
-
-/// Summarises trial results.
-pub fn summarize(
-    task: &str,
-    strategy: Strategy,
-    sensor_noise: bool,
-    vision: bool,
-    results: &[TrialResult],
-    wall: f64,
-) -> Summary {
-    let n = results.len().max(1) as f64;
-    let first: Vec<f64> = results.iter().filter_map(first_contact_y_std).collect();
-    let sim: f64 = results.iter().map(|r| r.sim_time).sum();
-    let sim_wall: f64 = results.iter().map(|r| r.sim_wall).sum();
-    let trial_wall: f64 = results.iter().map(|r| r.wall).sum();
-    Summary {
-        task: task.to_owned(),
-        strategy,
-        trials: results.len(),
-        success_rate: results.iter().filter(|r| r.success).count() as f64 / n,
-        contacts: ContactStats::of(results.iter().map(|r| r.contacts as f64).collect()),
-        measurements: ContactStats::of(results.iter().map(|r| r.measurements() as f64).collect()),
-        y_std_first_contact: first.iter().sum::<f64>() / first.len().max(1) as f64,
-        vision,
-        images_missed: results.iter().map(|r| r.images_missed).sum(),
-        final_error_mean: results.iter().map(|r| r.final_error).sum::<f64>() / n,
-        final_error_max: results.iter().map(|r| r.final_error).fold(0.0, f64::max),
-        trials_per_second: results.len() as f64 / wall.max(1e-9),
-        realtime_factor: sim / sim_wall.max(1e-9),
-        realtime_factor_overall: sim / trial_wall.max(1e-9),
-        sensor_noise,
-    }
-}
-
-impl Summary {
-    /// A readable table of the summary.
-    pub fn table(&self) -> String {
-        let mm = |m: f64| format!("{:.3} mm", m * 1e3);
-        let rows = [
-            ("task", self.task.clone()),
-            ("strategy", format!("{:?}", self.strategy).to_lowercase()),
-            (
-                "sensor noise",
-                if self.sensor_noise { "on" } else { "off" }.to_owned(),
-            ),
-            (
-                "camera",
-                if self.vision {
-                    format!("on ({} images missed an edge)", self.images_missed)
-                } else {
-                    "off".to_owned()
-                },
-            ),
-            ("trials", self.trials.to_string()),
-            (
-                "success rate",
-                format!("{:.1} %", 100.0 * self.success_rate),
-            ),
-            (
-                "contacts mean / median / p95 / max",
-                format!(
-                    "{:.2} / {} / {} / {}",
-                    self.contacts.mean, self.contacts.median, self.contacts.p95, self.contacts.max
-                ),
-            ),
-            (
-                "contact measurements mean / median / p95 / max",
-                format!(
-                    "{:.2} / {} / {} / {}",
-                    self.measurements.mean,
-                    self.measurements.median,
-                    self.measurements.p95,
-                    self.measurements.max
-                ),
-            ),
-            (
-                "object.y_std after the first contact",
-                mm(self.y_std_first_contact),
-            ),
-            (
-                "final error mean / max",
-                format!(
-                    "{} / {}",
-                    mm(self.final_error_mean),
-                    mm(self.final_error_max)
-                ),
-            ),
-            (
-                "trials per second",
-                format!("{:.2}", self.trials_per_second),
-            ),
-            (
-                "real-time factor (MuJoCo / whole loop)",
-                format!(
-                    "{:.1} x / {:.1} x",
-                    self.realtime_factor, self.realtime_factor_overall
-                ),
-            ),
-        ];
-        let w = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
-        rows.iter()
-            .map(|(k, v)| format!("  {k:<w$}  {v}\n"))
-            .collect()
-    }
-}
-
-/// Writes `trials.csv`: one row per trial.
-///
-/// # Errors
-/// When the file cannot be written.
-pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
-    let io = |e: csv::Error| HarnessError::io(path, std::io::Error::other(e));
-    let mut w = csv::Writer::from_path(path).map_err(io)?;
-    w.write_record([
-        "trial",
-        "offset_x_m",
-        "offset_y_m",
-        "contacts",
-        "measurements",
-        "success",
-        "final_error_m",
-        "y_std_first_contact_m",
-        "images_missed",
-        "wall_s",
-        "sim_time_s",
-    ])
-    .map_err(io)?;
-    for (i, r) in results.iter().enumerate() {
-        w.write_record([
-            i.to_string(),
-            format!("{:.9}", r.offset[0]),
-            format!("{:.9}", r.offset[1]),
-            r.contacts.to_string(),
-            r.measurements().to_string(),
-            r.success.to_string(),
-            format!("{:.9}", r.final_error),
-            first_contact_y_std(r).map_or(String::new(), |v| format!("{v:.9}")),
-            r.images_missed.to_string(),
-            format!("{:.4}", r.wall),
-            format!("{:.4}", r.sim_time),
-        ])
-        .map_err(io)?;
-    }
-    w.flush().map_err(|e| HarnessError::io(path, e))
-}
-
-/// One row of a `trials.csv`, read back (the columns a comparison needs).
-#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
-pub struct TrialRow {
-    /// True offset x (m).
-    pub offset_x_m: f64,
-    /// True offset y (m).
-    pub offset_y_m: f64,
-    /// Contact motions.
-    pub contacts: usize,
-    /// Contact measurements.
-    pub measurements: usize,
-    /// Whether the part went in.
-    pub success: bool,
-    /// `object.y_std` after the first contact measurement (m), if there was one.
-    pub y_std_first_contact_m: Option<f64>,
-}
-
-/// Reads a campaign's `trials.csv`.
-///
-/// # Errors
-/// When the file cannot be read or a row lacks a column or holds a malformed value.
-pub fn read_trials_csv(path: &Path) -> Result<Vec<TrialRow>> {
-    let bad = |e: csv::Error| HarnessError::Invalid {
-        what: "trials.csv",
-        reason: format!("{}: {e}", path.display()),
-    };
-    let mut r = csv::Reader::from_path(path).map_err(bad)?;
-    r.deserialize()
-        .collect::<std::result::Result<Vec<TrialRow>, _>>()
-        .map_err(bad)
-}
-
-/// Two campaigns side by side (contacts, contact measurements, y spread), and, when they ran
-/// the same true offsets, in how many trials the first needed fewer, as many or more contacts.
-pub fn comparison_table(names: [&str; 2], runs: [&[TrialRow]; 2]) -> String {
-    let stats =
-        |r: &[TrialRow], f: fn(&TrialRow) -> f64| ContactStats::of(r.iter().map(f).collect());
-    let row = |label: &str, f: &dyn Fn(&[TrialRow]) -> String| {
-        format!("  {label:<44} {:>22} {:>22}\n", f(runs[0]), f(runs[1]))
-    };
-    let quartet = |c: ContactStats| format!("{:.2} / {} / {} / {}", c.mean, c.median, c.p95, c.max);
-    let mut out = format!("  {:<44} {:>22} {:>22}\n", "", names[0], names[1]);
-    out += &row("trials", &|r| r.len().to_string());
-    out += &row("success rate", &|r| {
-        format!(
-            "{:.1} %",
-            100.0 * r.iter().filter(|t| t.success).count() as f64 / r.len().max(1) as f64
-        )
-    });
-    out += &row("contacts mean / median / p95 / max", &|r| {
-        quartet(stats(r, |t| t.contacts as f64))
-    });
-    out += &row("contact measurements mean / median / p95 / max", &|r| {
-        quartet(stats(r, |t| t.measurements as f64))
-    });
-    out += &row("object.y_std after the first contact (mean)", &|r| {
-        let v: Vec<f64> = r.iter().filter_map(|t| t.y_std_first_contact_m).collect();
-        if v.is_empty() {
-            "-".into()
-        } else {
-            format!("{:.4} mm", 1e3 * v.iter().sum::<f64>() / v.len() as f64)
-        }
-    });
-    let paired = runs[0].len() == runs[1].len()
-        && runs[0].iter().zip(runs[1]).all(|(a, b)| {
-            (a.offset_x_m - b.offset_x_m).abs() < 1e-9 && (a.offset_y_m - b.offset_y_m).abs() < 1e-9
-        });
-    if paired {
-        let count = |f: fn(usize, usize) -> bool| {
-            runs[0]
-                .iter()
-                .zip(runs[1])
-                .filter(|(a, b)| f(a.contacts, b.contacts))
-                .count()
-        };
-        out += &format!(
-            "  same true offsets: {} needed fewer contacts in {}, as many in {}, more in {} trials\n",
-            names[0],
-            count(|a, b| a < b),
-            count(|a, b| a == b),
-            count(|a, b| a > b)
-        );
-    } else {
-        out += "  the campaigns ran different true offsets: no trial-by-trial comparison\n";
-    }
-    out
-}
-
-/// `object.y_std` after a trial's first contact measurement.
-fn first_contact_y_std(r: &TrialResult) -> Option<f64> {
-    r.steps.iter().find_map(|s| s.estimate).map(|e| e.std[1])
-}
-
-/// Writes `summary.json`.
-///
-/// # Errors
-/// When the file cannot be written.
-pub fn write_summary(path: &Path, s: &Summary) -> Result<()> {
-    let text = serde_json::to_string_pretty(s)
-        .map_err(|e| HarnessError::io(path, std::io::Error::other(e)))?;
-    std::fs::write(path, text + "\n").map_err(|e| HarnessError::io(path, e))
 }
 
 /// Times a closure (s).

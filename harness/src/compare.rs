@@ -1,9 +1,15 @@
-//! Agreement of two FT-Maps over the cells of the first: per channel the sign agreement,
-//! the correlation and the RMS difference, and the mean angle between torque directions.
+//! Comparisons: the agreement of two FT-Maps over the cells of the first (per channel the
+//! sign agreement, the correlation and the RMS difference, and the mean angle between torque
+//! directions), and two campaigns' trials side by side.
 
-use ftmap::{CHANNELS, FtMap, NCH};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use ftmap::{CHANNELS, FtMap, NCH, WrenchModel};
 
 use crate::error::Result;
+use crate::plot;
+use crate::report::{ContactStats, TrialRow, read_trials_csv};
 
 /// Torques below this magnitude (N m) carry no sign: cells where either map is below it
 /// are left out of the sign and direction figures.
@@ -162,4 +168,165 @@ impl Agreement {
         );
         s
     }
+}
+
+/// Two map files compared: their paths, wrench models and agreement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapComparison {
+    /// The files: A (whose cells are compared) and B (interpolated at A's cells).
+    pub files: [PathBuf; 2],
+    /// Their wrench models.
+    pub models: [WrenchModel; 2],
+    /// B's agreement with A.
+    pub agreement: Agreement,
+}
+
+impl MapComparison {
+    /// Loads two map files and compares B with A at A's cells.
+    ///
+    /// # Errors
+    /// When a file cannot be loaded or the maps' grids have different DOFs.
+    pub fn of_files(a: &Path, b: &Path) -> Result<Self> {
+        let (ma, mb) = (ftmap::map::format::load(a)?, ftmap::map::format::load(b)?);
+        Ok(Self {
+            files: [a.to_owned(), b.to_owned()],
+            models: [ma.meta().model, mb.meta().model],
+            agreement: compare(&ma, &mb)?,
+        })
+    }
+
+    /// Scatter plot of tx and ty, B against A.
+    ///
+    /// # Errors
+    /// When the image cannot be written.
+    pub fn plot(&self, png: &Path) -> Result<()> {
+        plot::agreement(
+            png,
+            &["tx [N m]", "ty [N m]"],
+            &self.agreement.pairs[3..5],
+            ["A", "B"],
+        )
+    }
+}
+
+impl fmt::Display for MapComparison {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "A = {} ({:?}), B = {} ({:?})",
+            self.files[0].display(),
+            self.models[0],
+            self.files[1].display(),
+            self.models[1]
+        )?;
+        f.write_str(&self.agreement.table())
+    }
+}
+
+/// Two campaigns side by side: their folders' names and their `trials.csv` rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunsComparison {
+    /// The campaigns' names (their output folders' names).
+    pub names: [String; 2],
+    /// Their trials.
+    pub runs: [Vec<TrialRow>; 2],
+}
+
+impl RunsComparison {
+    /// Reads the `trials.csv` of two campaigns' output folders.
+    ///
+    /// # Errors
+    /// When a file cannot be read or holds a malformed row.
+    pub fn read(a: &Path, b: &Path) -> Result<Self> {
+        let name = |p: &Path| {
+            p.file_name().map_or_else(
+                || p.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            )
+        };
+        Ok(Self {
+            runs: [
+                read_trials_csv(&a.join("trials.csv"))?,
+                read_trials_csv(&b.join("trials.csv"))?,
+            ],
+            names: [name(a), name(b)],
+        })
+    }
+
+    /// Bar plot of the contacts per trial.
+    ///
+    /// # Errors
+    /// When the image cannot be written.
+    pub fn plot(&self, png: &Path) -> Result<()> {
+        plot::contacts_per_trial(
+            png,
+            [&self.names[0], &self.names[1]],
+            [&self.runs[0], &self.runs[1]],
+        )
+    }
+}
+
+impl fmt::Display for RunsComparison {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&comparison_table(
+            [&self.names[0], &self.names[1]],
+            [&self.runs[0], &self.runs[1]],
+        ))
+    }
+}
+
+/// Two campaigns side by side (contacts, contact measurements, y spread), and, when they ran
+/// the same true offsets, in how many trials the first needed fewer, as many or more contacts.
+fn comparison_table(names: [&str; 2], runs: [&[TrialRow]; 2]) -> String {
+    let stats =
+        |r: &[TrialRow], f: fn(&TrialRow) -> f64| ContactStats::of(r.iter().map(f).collect());
+    let row = |label: &str, f: &dyn Fn(&[TrialRow]) -> String| {
+        format!("  {label:<44} {:>22} {:>22}\n", f(runs[0]), f(runs[1]))
+    };
+    let quartet = |c: ContactStats| format!("{:.2} / {} / {} / {}", c.mean, c.median, c.p95, c.max);
+    let mut out = format!("  {:<44} {:>22} {:>22}\n", "", names[0], names[1]);
+    out += &row("trials", &|r| r.len().to_string());
+    out += &row("success rate", &|r| {
+        format!(
+            "{:.1} %",
+            100.0 * r.iter().filter(|t| t.success).count() as f64 / r.len().max(1) as f64
+        )
+    });
+    out += &row("contacts mean / median / p95 / max", &|r| {
+        quartet(stats(r, |t| t.contacts as f64))
+    });
+    out += &row("contact measurements mean / median / p95 / max", &|r| {
+        quartet(stats(r, |t| t.measurements as f64))
+    });
+    out += &row("object.y_std after the first contact (mean)", &|r| {
+        let v: Vec<f64> = r.iter().filter_map(|t| t.y_std_first_contact_m).collect();
+        if v.is_empty() {
+            "-".into()
+        } else {
+            format!("{:.4} mm", 1e3 * v.iter().sum::<f64>() / v.len() as f64)
+        }
+    });
+    let paired = runs[0].len() == runs[1].len()
+        && runs[0].iter().zip(runs[1]).all(|(a, b)| {
+            (a.offset_x_m - b.offset_x_m).abs() < 1e-9 && (a.offset_y_m - b.offset_y_m).abs() < 1e-9
+        });
+    if paired {
+        let count = |f: fn(usize, usize) -> bool| {
+            runs[0]
+                .iter()
+                .zip(runs[1])
+                .filter(|(a, b)| f(a.contacts, b.contacts))
+                .count()
+        };
+        out += &format!(
+            "  same true offsets: {} needed fewer contacts in {}, as many in {}, more in {} trials\n",
+            names[0],
+            count(|a, b| a < b),
+            count(|a, b| a == b),
+            count(|a, b| a > b)
+        );
+    } else {
+        out += "  the campaigns ran different true offsets: no trial-by-trial comparison\n";
+    }
+    out
 }

@@ -1,7 +1,7 @@
 //! The error type of the harness: one structured variant per way a library, scene, FMU,
-//! map or trial can fail.
+//! map, camera, campaign or report can fail; wrapped errors stay reachable as sources.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Everything the harness can refuse or fail at.
 #[derive(Debug, thiserror::Error)]
@@ -18,13 +18,43 @@ pub enum HarnessError {
         /// The version of the loaded library.
         got: i32,
     },
-    /// MuJoCo refused a scene.
+    /// A scene file that MuJoCo loaded is not one the harness can drive.
     #[error("scene {}: {reason}", path.display())]
     Scene {
-        /// The scene file (or the task it was generated for).
+        /// The scene file.
         path: PathBuf,
-        /// MuJoCo's or the generator's message.
+        /// What is wrong with it.
         reason: String,
+    },
+    /// MuJoCo refused a scene.
+    #[error("scene {}: {source}", path.display())]
+    SceneLoad {
+        /// The scene file (`<string>` for MJCF text).
+        path: PathBuf,
+        /// MuJoCo's error.
+        source: mujoco_rs::error::MjModelError,
+    },
+    /// A task's scene file has not been generated.
+    #[error("scene {}: no such file (generate it: `harness scene --task {task}`)", path.display())]
+    SceneMissing {
+        /// Where the scene was looked for.
+        path: PathBuf,
+        /// The task it belongs to.
+        task: String,
+    },
+    /// A scene just generated from its task does not load.
+    #[error("loading the new scene {}", path.display())]
+    NewScene {
+        /// The scene file written.
+        path: PathBuf,
+        /// Why it does not load.
+        source: Box<HarnessError>,
+    },
+    /// Committed scene files differ from what their tasks generate.
+    #[error("scenes not current (run `harness scene`): {}", joined(paths))]
+    ScenesStale {
+        /// The stale scene files.
+        paths: Vec<PathBuf>,
     },
     /// A named element the harness needs is missing from a scene.
     #[error("scene has no {kind} named `{name}` (regenerate it: `harness scene --task <task>`)")]
@@ -41,16 +71,56 @@ pub enum HarnessError {
         path: PathBuf,
     },
     /// The FMU could not be loaded, instantiated or driven.
-    #[error("FMU {what}: {reason}")]
+    #[error("FMU {what}")]
     Fmu {
         /// The call or variable concerned.
         what: String,
-        /// The importer's message.
-        reason: String,
+        /// The importer's error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
     /// A task, map or file problem reported by the map library.
     #[error(transparent)]
     Map(#[from] ftmap::MapError),
+    /// A task's FT-Map could not be computed or read from the cache.
+    #[error("the FT-Map of task {task}")]
+    TaskMap {
+        /// The task.
+        task: String,
+        /// The map library's error.
+        source: ftmap::MapError,
+    },
+    /// The FT-Map file handed to the FMU does not exist.
+    #[error("map {} not found: `ftmap generate --task {task} --out {}`", path.display(), path.display())]
+    MapMissing {
+        /// The map file.
+        path: PathBuf,
+        /// The task it should be computed for.
+        task: String,
+    },
+    /// The task has no camera (no `[camera]` table) but the camera was asked for.
+    #[error(
+        "vision: task {task} has no camera (a [camera] table in its task.toml; bearing_housing has one)"
+    )]
+    NoCamera {
+        /// The task.
+        task: String,
+    },
+    /// `render` asked for a task without a camera.
+    #[error("task {task} has no vision features and no camera (only bearing_housing has)")]
+    RenderNeedsCamera {
+        /// The task.
+        task: String,
+    },
+    /// The camera was asked for with a strategy that has no estimator to hand images to.
+    #[error("--vision needs --strategy pf (the spiral search uses no estimator)")]
+    VisionNeedsEstimator,
+    /// Offscreen rendering failed (no OpenGL context, or the renderer refused).
+    #[error("offscreen rendering: {source}")]
+    Render {
+        /// The renderer's error.
+        source: mujoco_rs::renderer::RendererError,
+    },
     /// A file could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {
@@ -58,6 +128,30 @@ pub enum HarnessError {
         path: PathBuf,
         /// The OS error.
         source: std::io::Error,
+    },
+    /// A folder could not be created.
+    #[error("creating {}", path.display())]
+    CreateDir {
+        /// The folder.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A CSV file could not be written, read or parsed.
+    #[error("{}: {source}", path.display())]
+    Csv {
+        /// The file.
+        path: PathBuf,
+        /// The CSV library's error.
+        source: csv::Error,
+    },
+    /// A JSON file could not be written.
+    #[error("{}: {source}", path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The JSON library's error.
+        source: serde_json::Error,
     },
     /// An argument outside what the harness supports.
     #[error("{what}: {reason}")]
@@ -67,13 +161,13 @@ pub enum HarnessError {
         /// Why it is refused.
         reason: String,
     },
-    /// A plot could not be drawn.
-    #[error("plot {}: {reason}", path.display())]
+    /// A plot or image could not be drawn or written.
+    #[error("plot {}: {source}", path.display())]
     Plot {
         /// The image file.
         path: PathBuf,
-        /// The plotting library's message.
-        reason: String,
+        /// The plotting or PNG library's error.
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
 }
 
@@ -88,4 +182,43 @@ impl HarnessError {
             source,
         }
     }
+
+    /// A plotting or PNG error on the image `path`.
+    pub fn plot(path: &Path, source: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        Self::Plot {
+            path: path.to_owned(),
+            source: source.into(),
+        }
+    }
+}
+
+/// Creates a folder and its parents.
+///
+/// # Errors
+/// [`HarnessError::CreateDir`] when it cannot be created.
+pub(crate) fn create_dir(path: &Path) -> Result<()> {
+    std::fs::create_dir_all(path).map_err(|source| HarnessError::CreateDir {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// Creates the folder a file is to be written in (nothing for a bare file name).
+///
+/// # Errors
+/// [`HarnessError::CreateDir`] when it cannot be created.
+pub(crate) fn create_parent(file: &Path) -> Result<()> {
+    match file.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) => create_dir(dir),
+        None => Ok(()),
+    }
+}
+
+/// Paths joined by ", " for a message.
+fn joined(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
 }

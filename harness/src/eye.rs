@@ -8,7 +8,8 @@ use ftmap::vision::VisionModel;
 use crate::camera::CameraScene;
 use crate::error::{HarnessError, Result};
 use crate::scene::{SceneSpec, scene_path};
-use crate::vision::{self, Detector, Features};
+use crate::vision::features::{Detector, Features, detect_edges, task_model};
+use crate::vision::image::add_noise;
 
 /// The task's camera with its vision model.
 pub struct Eye {
@@ -28,16 +29,12 @@ impl Eye {
     pub fn open(task: &Task, noise: f64, detector: Detector) -> Result<Self> {
         let spec = SceneSpec::of_task(task)?;
         if spec.camera.is_none() {
-            return Err(HarnessError::Invalid {
-                what: "vision",
-                reason: format!(
-                    "task {} has no camera (a [camera] table in its task.toml; bearing_housing has one)",
-                    task.name
-                ),
+            return Err(HarnessError::NoCamera {
+                task: task.name.clone(),
             });
         }
         let scene = CameraScene::load(&scene_path(task), spec)?;
-        let model = vision::task_model(task, scene.camera())?;
+        let model = task_model(task, scene.camera())?;
         Ok(Self {
             scene,
             model,
@@ -69,9 +66,9 @@ impl Eye {
         let cam = self.scene.camera();
         let mut gray = image.to_gray();
         if self.noise > 0.0 {
-            vision::add_noise(&mut gray, self.noise, seed);
+            add_noise(&mut gray, self.noise, seed);
         }
-        let edges = vision::detect_edges(
+        let edges = detect_edges(
             &gray,
             &cam,
             &self.model,

@@ -100,7 +100,7 @@ fn fmi_err(what: impl Into<String>) -> impl FnOnce(fmi::fmi2::Fmi2Error) -> Harn
     let what = what.into();
     move |e| HarnessError::Fmu {
         what,
-        reason: e.to_string(),
+        source: e.into(),
     }
 }
 
@@ -127,7 +127,7 @@ impl Fmu {
         }
         let import = fmi::import::from_path::<Fmi2Import>(path).map_err(|e| HarnessError::Fmu {
             what: format!("import {}", path.display()),
-            reason: e.to_string(),
+            source: e.into(),
         })?;
         let md = import.model_description();
         let vr = |name: &str| {
@@ -135,7 +135,7 @@ impl Fmu {
                 .map(|v| v.value_reference)
                 .map_err(|e| HarnessError::Fmu {
                     what: format!("variable `{name}`"),
-                    reason: e.to_string(),
+                    source: e.into(),
                 })
         };
         let refs = Refs {
@@ -181,7 +181,7 @@ impl Fmu {
             .instantiate_cs("harness", false, false)
             .map_err(|e| HarnessError::Fmu {
                 what: "fmi2Instantiate".into(),
-                reason: e.to_string(),
+                source: e.into(),
             })?;
         let r = &self.refs;
         for (vr, file, name) in [
@@ -190,9 +190,9 @@ impl Fmu {
         ] {
             if let Some(file) = file {
                 let text = file.to_string_lossy().into_owned();
-                let c = CString::new(text).map_err(|e| HarnessError::Invalid {
-                    what: name,
-                    reason: e.to_string(),
+                let c = CString::new(text).map_err(|e| HarnessError::Fmu {
+                    what: format!("parameter {name}"),
+                    source: e.into(),
                 })?;
                 inst.set_string(&[vr], &[c])
                     .map_err(fmi_err(format!("set {name}")))?;

@@ -1,17 +1,27 @@
-//! ftfusion's MuJoCo validation harness: task scenes generated from `task.toml`, contact
-//! motions in MuJoCo 3.17.0 (mujoco-rs), the F/T sensor in the FT-Map's convention, and
-//! the closed loop of the paper's Algorithm 1 through `FtFusion.fmu` (the `fmi` importer),
-//! with trial campaigns, measured maps and plots.
+#![doc = include_str!("../README.md")]
+//! Modules, from the simulated world up:
+//!
+//! - [`runtime`], the MuJoCo version check, and [`error`], the [`HarnessError`] type;
+//! - [`scene`], MJCF scenes from `task.toml`; [`sim`], the work cell's contact motions;
+//!   [`sensor`], the F/T reading in the map's convention and its noise;
+//! - [`camera`], the calibrated camera and headless rendering; [`vision`], the camera
+//!   pipeline (image primitives, the gradient and Hough line detectors, features);
+//!   [`eye`], the camera as a trial's second sensor;
+//! - [`fmu_driver`], `FtFusion.fmu` through FMI calls; [`trial`], one trial (Algorithm 1 or
+//!   the spiral search); [`campaign`], campaigns set up and run; [`report`], `trials.csv`
+//!   and `summary.json`; [`plot`], the plots;
+//! - [`scan`], measured maps; [`compare`], two maps' agreement and two campaigns side by
+//!   side; [`render`], one camera image with its edges, and the detectors' timing.
 
 pub mod camera;
 pub mod campaign;
-pub mod cli;
 pub mod compare;
 pub mod error;
 pub mod eye;
 pub mod fmu_driver;
-pub mod hough;
 pub mod plot;
+pub mod render;
+pub mod report;
 pub mod runtime;
 pub mod scan;
 pub mod scene;

@@ -7,25 +7,15 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::campaign::TrialRow;
-use crate::error::{HarnessError, Result};
+use crate::error::{HarnessError, Result, create_parent};
 use crate::fmu_driver::Estimate;
+use crate::report::TrialRow;
 use crate::trial::TrialResult;
 
-type Draw = std::result::Result<(), Box<dyn std::error::Error>>;
+type Draw = std::result::Result<(), Box<dyn std::error::Error + Send + Sync>>;
 
 fn wrap(path: &Path, r: Draw) -> Result<()> {
-    r.map_err(|e| HarnessError::Plot {
-        path: path.to_owned(),
-        reason: e.to_string(),
-    })
-}
-
-fn ensure_dir(path: &Path) -> Result<()> {
-    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(d) => std::fs::create_dir_all(d).map_err(|e| HarnessError::io(d, e)),
-        None => Ok(()),
-    }
+    r.map_err(|e| HarnessError::plot(path, e))
 }
 
 /// Estimate and spread after the first three measurements of `trial` (an image before the
@@ -34,7 +24,7 @@ fn ensure_dir(path: &Path) -> Result<()> {
 /// # Errors
 /// When the image cannot be written.
 pub fn estimates(path: &Path, trial: &TrialResult, size: f64) -> Result<()> {
-    ensure_dir(path)?;
+    create_parent(path)?;
     wrap(path, draw_estimates(path, trial, size))
 }
 
@@ -176,7 +166,7 @@ fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
 /// # Errors
 /// When the image cannot be written.
 pub fn contacts_per_trial(path: &Path, names: [&str; 2], runs: [&[TrialRow]; 2]) -> Result<()> {
-    ensure_dir(path)?;
+    create_parent(path)?;
     wrap(path, draw_contacts_per_trial(path, names, runs))
 }
 
@@ -237,7 +227,7 @@ fn draw_contacts_per_trial(path: &Path, names: [&str; 2], runs: [&[TrialRow]; 2]
 /// # Errors
 /// When the image cannot be written.
 pub fn sweep(path: &Path, results: &[TrialResult], size: f64, cell: f64) -> Result<()> {
-    ensure_dir(path)?;
+    create_parent(path)?;
     wrap(path, draw_sweep(path, results, size, cell))
 }
 
@@ -305,7 +295,7 @@ pub fn agreement(
     pairs: &[Vec<(f64, f64)>],
     labels: [&str; 2],
 ) -> Result<()> {
-    ensure_dir(path)?;
+    create_parent(path)?;
     wrap(path, draw_agreement(path, names, pairs, labels))
 }
 

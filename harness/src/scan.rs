@@ -1,14 +1,70 @@
 //! Measured FT-Maps (the paper's scanned maps): one contact motion in MuJoCo per cell of
 //! Omega, written in the same file format as computed maps (model `Measured`).
 
+use std::fmt;
+use std::path::PathBuf;
+
 use indicatif::{ProgressBar, ProgressStyle};
 
 use ftmap::mesh::Mesh;
 use ftmap::{FtMap, Grid, GridAxis, MapMeta, NCH, SourceMesh, Task, WrenchModel};
 
-use crate::error::{HarnessError, Result};
+use crate::error::{HarnessError, Result, create_parent};
 use crate::sensor::map_wrench;
-use crate::sim::Sim;
+use crate::sim::{Sim, open_task};
+
+/// What the `scan` command measures (SI units).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanOptions {
+    /// Task name or task.toml path.
+    pub task: String,
+    /// Output map file.
+    pub out: PathBuf,
+    /// Grid step (m).
+    pub step: f64,
+    /// Half width of the scanned square (m); default: Omega's size_trans.
+    pub half_width: Option<f64>,
+}
+
+/// A measured map written to a file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scanned {
+    /// The map file.
+    pub path: PathBuf,
+    /// Cells measured.
+    pub cells: usize,
+    /// Simulated time of all contact motions (s).
+    pub simulated: f64,
+}
+
+impl fmt::Display for Scanned {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "measured map {} ({} cells, {:.1} s simulated)",
+            self.path.display(),
+            self.cells,
+            self.simulated
+        )
+    }
+}
+
+/// Measures a task's map by contact motions ([`scan`]) and writes it to `options.out`.
+///
+/// # Errors
+/// When the task, its scene or the grid is invalid, or the file cannot be written.
+pub fn scan_to_file(options: &ScanOptions) -> Result<Scanned> {
+    let (task, mut sim) = open_task(&options.task)?;
+    let size = options.half_width.unwrap_or(task.omega.size_trans);
+    let map = scan(&mut sim, &task, options.step, size)?;
+    create_parent(&options.out)?;
+    ftmap::map::format::save(&map, &options.out)?;
+    Ok(Scanned {
+        path: options.out.clone(),
+        cells: map.grid().cells(),
+        simulated: sim.simulated(),
+    })
+}
 
 /// Scans Omega's object translation at `step` over ±`size` (m): for each cell the object is
 /// placed at the cell's offset and one contact motion is made at the nominal goal.

@@ -650,3 +650,32 @@ pub fn scene_is_current(task: &Task) -> Result<bool> {
 pub fn tasks_with_scenes() -> Result<Vec<Task>> {
     Ok(Task::all_with_geometry()?)
 }
+
+/// The task `name` (a name or a task.toml path), or every task with a scene when `None`.
+///
+/// # Errors
+/// When the task or the models folder cannot be read.
+pub fn tasks_named(name: Option<&str>) -> Result<Vec<Task>> {
+    match name {
+        Some(n) => Ok(vec![Task::find(n)?]),
+        None => tasks_with_scenes(),
+    }
+}
+
+/// Checks that the tasks' committed scene files are what their `task.toml` generates.
+///
+/// # Errors
+/// [`HarnessError::ScenesStale`] naming those that are not; when a task has no `[geometry]`.
+pub fn check_scenes(tasks: &[Task]) -> Result<()> {
+    let mut paths = Vec::new();
+    for t in tasks {
+        if !scene_is_current(t)? {
+            paths.push(scene_path(t));
+        }
+    }
+    if paths.is_empty() {
+        Ok(())
+    } else {
+        Err(HarnessError::ScenesStale { paths })
+    }
+}

@@ -1,12 +1,13 @@
 //! The F/T sensor in the FT-Map's convention, and a model of a real sensor's noise.
 //!
-//! The map's wrench (README, "Sign conventions") is the one the environment exerts on part
-//! A, in the nominal task frame's axes, torque about the sensor origin. MuJoCo's `force`
-//! and `torque` sensors at site `ft` (on `part_a`, at the sensor origin, axes parallel to
-//! the task frame) report the wrench that the parent body (the carriage) exerts on part A,
-//! in the site frame, torque about the site. With gravity off and the contact settled,
-//! part A is in equilibrium: carriage wrench + environment wrench = 0, so the map's wrench
-//! is the negated reading (a peg pressed on a plate reads fz = -50 N raw, +50 N converted).
+//! The map's wrench (docs/method.md, "Sign conventions") is the one the environment exerts
+//! on part A, in the nominal task frame's axes, torque about the sensor origin. MuJoCo's
+//! `force` and `torque` sensors at site `ft` (on `part_a`, at the sensor origin, axes
+//! parallel to the task frame) report the wrench that the parent body (the carriage) exerts
+//! on part A, in the site frame, torque about the site. With gravity off and the contact
+//! settled, part A is in equilibrium: carriage wrench + environment wrench = 0, so the map's
+//! wrench is the negated reading (a peg pressed on a plate reads fz = -50 N raw, +50 N
+//! converted).
 
 use rand::Rng;
 

@@ -7,12 +7,13 @@
 //! pushes with the imposed force. So each contact is a pure function of the object offset
 //! and the commanded point (the FMPy script reproduces it step for step).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+use ftmap::Task;
 use mujoco_rs::prelude::*;
 
 use crate::error::{HarnessError, Result};
-use crate::scene::{APPROACH_CLEARANCE, SceneSpec};
+use crate::scene::{APPROACH_CLEARANCE, SceneSpec, scene_path, write_scene};
 
 /// Longest contact motion (steps of 1 ms) before it is reported as not settled.
 pub const MAX_STEPS: usize = 2000;
@@ -61,17 +62,14 @@ impl Sim {
     pub fn load(scene: &Path, spec: SceneSpec) -> Result<Self> {
         crate::runtime::check_mujoco()?;
         if !scene.is_file() {
-            return Err(HarnessError::Scene {
+            return Err(HarnessError::SceneMissing {
                 path: scene.to_owned(),
-                reason: format!(
-                    "no such file (generate it: `harness scene --task {}`)",
-                    spec.task
-                ),
+                task: spec.task.clone(),
             });
         }
-        let model = MjModel::from_xml(scene).map_err(|e| HarnessError::Scene {
+        let model = MjModel::from_xml(scene).map_err(|source| HarnessError::SceneLoad {
             path: scene.to_owned(),
-            reason: e.to_string(),
+            source,
         })?;
         let joint = |name| id(&model, MjtObjBase::mjOBJ_JOINT, "joint", name);
         let (jx, jy, jz) = (joint("x")?, joint("y")?, joint("z")?);
@@ -103,6 +101,14 @@ impl Sim {
             object: [0.0; 2],
             simulated: 0.0,
         })
+    }
+
+    /// Loads a task's committed scene.
+    ///
+    /// # Errors
+    /// As [`Sim::load`], and when the task has no `[geometry]`.
+    pub fn of_task(task: &Task) -> Result<Self> {
+        Self::load(&scene_path(task), SceneSpec::of_task(task)?)
     }
 
     /// The scene description this simulation was generated from.
@@ -159,4 +165,29 @@ impl Sim {
             time,
         }
     }
+}
+
+/// The task `name` (a name or a task.toml path) and a simulation of its committed scene.
+///
+/// # Errors
+/// When the task cannot be read or its scene cannot be loaded.
+pub fn open_task(name: &str) -> Result<(Task, Sim)> {
+    let task = Task::find(name)?;
+    let sim = Sim::of_task(&task)?;
+    Ok((task, sim))
+}
+
+/// Writes a task's scene from its `task.toml` and loads it back (MuJoCo accepts it and the
+/// harness finds its elements); returns its path.
+///
+/// # Errors
+/// When the scene cannot be written, or [`HarnessError::NewScene`] when it does not load.
+pub fn regenerate_scene(task: &Task) -> Result<PathBuf> {
+    let path = write_scene(task)?;
+    let spec = SceneSpec::of_task(task)?;
+    Sim::load(&path, spec).map_err(|e| HarnessError::NewScene {
+        path: path.clone(),
+        source: Box::new(e),
+    })?;
+    Ok(path)
 }

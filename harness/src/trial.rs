@@ -23,7 +23,7 @@ use crate::sim::Sim;
 pub const SUCCESS_HEIGHT: f64 = 0.001;
 
 /// How the next approach point is chosen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Strategy {
     /// Move to the FMU's estimate after each contact (Algorithm 1).

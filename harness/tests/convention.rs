@@ -30,7 +30,7 @@ fn the_peg_on_rim_torque_direction_follows_the_offset_in_8_directions() {
         let c = sim.contact_motion([0.0, 0.0]);
         let w = map_wrench(c.raw);
         let m = map.interpolate(&off).unwrap();
-        // z x offset: the direction the README's convention gives.
+        // z x offset: the direction the convention of docs/method.md gives.
         let expect = [-off[1], off[0]];
         let dir = |t: [f64; 2]| t[1].atan2(t[0]);
         let diff = |a: f64, b: f64| {

@@ -7,8 +7,9 @@ mod common;
 
 use std::sync::Mutex;
 
-use harness::hough::{HoughParams, detect_line_hough};
-use harness::vision::{self, Gradient, Line};
+use harness::vision::features::{Detector, detect_edges_in};
+use harness::vision::hough::{HoughParams, detect_line_hough};
+use harness::vision::image::{Gradient, Line, add_noise};
 
 /// One offscreen GL context at a time.
 static GL: Mutex<()> = Mutex::new(());
@@ -44,18 +45,18 @@ fn hough_edges_match_the_projected_geometry_and_detect_line() {
         for noise in [None, Some(k as u64 + 1)] {
             let mut gray = image.to_gray();
             if let Some(seed) = noise {
-                vision::add_noise(&mut gray, 5.0, seed);
+                add_noise(&mut gray, 5.0, seed);
             }
             let grad = Gradient::sobel(cam.width, cam.height, &gray);
             // Expected endpoints, bands (the passive part's covers Omega), truth and detect_line's result.
-            let results = vision::detect_edges_in(
+            let results = detect_edges_in(
                 &grad,
                 &cam,
                 &model,
                 tcp,
                 [object[0], object[1], 0.0],
                 task.omega.size_trans,
-                vision::Detector::Gradient,
+                Detector::Gradient,
             );
             assert_eq!(results.len(), 4, "four edges expected");
             for r in &results {

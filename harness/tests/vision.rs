@@ -9,7 +9,8 @@ use ftmap::Task;
 use ftmap::vision::VisionModel;
 use harness::camera::CameraScene;
 use harness::scene::{SceneSpec, scene_path};
-use harness::vision::{self, Detector, Features, Gradient, VisionError};
+use harness::vision::features::{Detector, Features, detect_edges, model_edges};
+use harness::vision::image::{Gradient, VisionError, add_noise};
 
 /// One offscreen GL context at a time.
 static GL: Mutex<()> = Mutex::new(());
@@ -29,9 +30,9 @@ fn errors(
     let cam = view.camera();
     let mut gray = image.to_gray();
     if let Some(seed) = noise {
-        vision::add_noise(&mut gray, 5.0, seed);
+        add_noise(&mut gray, 5.0, seed);
     }
-    let results = vision::detect_edges(
+    let results = detect_edges(
         &gray,
         &cam,
         model,
@@ -152,13 +153,13 @@ fn no_part_in_view_gives_feature_not_found() {
     let (task, mut view, model) = common::bearing();
     let tcp = [0.0, 0.0, view.approach_height()];
     view.place([0.0, 0.0], tcp);
-    let expected = vision::model_edges(&model, &view.camera(), tcp, [0.0; 3]);
+    let expected = model_edges(&model, &view.camera(), tcp, [0.0; 3]);
     // Both parts moved 1 m aside: nothing in the camera's view.
     view.place([0.0, 1.0], [0.0, 1.0, tcp[2]]);
     let image = view.render().expect("offscreen rendering (Mesa EGL)");
     let cam = view.camera();
     let mut gray = image.to_gray();
-    vision::add_noise(&mut gray, 5.0, 3);
+    add_noise(&mut gray, 5.0, 3);
     let grad = Gradient::sobel(cam.width, cam.height, &gray);
     assert_eq!(expected.len(), 4, "four edges expected");
     for e in &expected {
@@ -172,7 +173,7 @@ fn no_part_in_view_gives_feature_not_found() {
             }
         }
     }
-    let results = vision::detect_edges(
+    let results = detect_edges(
         &gray,
         &cam,
         &model,
@@ -333,9 +334,9 @@ fn measured_features_match_the_particle_side_model() {
         let image = view.render().expect("offscreen rendering (Mesa EGL)");
         let cam = view.camera();
         let mut gray = image.to_gray();
-        vision::add_noise(&mut gray, 5.0, 11);
+        add_noise(&mut gray, 5.0, 11);
         let object = [object[0], object[1], 0.0];
-        let r = vision::detect_edges(
+        let r = detect_edges(
             &gray,
             &cam,
             &model,

@@ -10,7 +10,7 @@ use ftmap::{FtMap, Task};
 use harness::camera::CameraScene;
 use harness::scene::{SceneSpec, scene_path};
 use harness::sim::Sim;
-use harness::vision;
+use harness::vision::features::task_model;
 
 /// The peg_in_hole task and a simulation of its committed scene.
 pub fn peg() -> (Task, Sim) {
@@ -42,6 +42,6 @@ pub fn bearing() -> (Task, CameraScene, VisionModel) {
     let spec = SceneSpec::of_task(&task).expect("its scene description");
     let view = CameraScene::load(&scene_path(&task), spec)
         .expect("its committed scene with camera `vision`");
-    let model = vision::task_model(&task, view.camera()).expect("bearing housing features");
+    let model = task_model(&task, view.camera()).expect("bearing housing features");
     (task, view, model)
 }

@@ -14,7 +14,7 @@
 //! along the line while the gradient holds, and fitted again. Too weak a peak, or too few
 //! supporting points, is [`VisionError::FeatureNotFound`], never a guess.
 
-use crate::vision::{Gradient, Line, VisionError, robust_fit};
+use super::image::{EdgePoints, FitParams, Gradient, Line, NEAR, VisionError};
 
 /// Tuning of [`detect_line_hough`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,9 +51,6 @@ impl Default for HoughParams {
         }
     }
 }
-
-/// Tolerance (px) around the peak line and the fitted line for edge points.
-const NEAR: f64 = 1.5;
 
 /// Detects the line edge expected between `expected[0]` and `expected[1]` (pixel coordinates)
 /// by the bounded Hough transform.
@@ -212,7 +209,6 @@ pub fn detect_line_hough(
     // Refinement in (s, t): s the major axis of the expected line (rows when steep), t across.
     let steep = dv.abs() > du.abs();
     let st = |q: [f64; 2]| if steep { [q[1], q[0]] } else { q };
-    let xy = |s: f64, t: f64| if steep { [t, s] } else { [s, t] };
     // The peak line t = a s + b: through m + rho n, along (n.y, -n.x).
     let (q, dir) = (
         st([m[0] + rho * n[0], m[1] + rho * n[1]]),
@@ -237,7 +233,7 @@ pub fn detect_line_hough(
     // Positions outside the image hold no points (but count as searched).
     for s in s0.max(1.0) as i64..=s1.min(smax as f64 - 2.0) as i64 {
         let t = a * s as f64 + b;
-        if let Some((t, g)) = peak(grad, steep, nf, s, t - NEAR, t + NEAR)
+        if let Some((t, g)) = grad.peak(steep, nf, s, t - NEAR, t + NEAR)
             && g >= p.min_gradient
         {
             pts.push([s as f64, t]);
@@ -252,103 +248,29 @@ pub fn detect_line_hough(
             p.min_gradient
         ));
     }
-    let Some((mut a, mut b)) = robust_fit(&mut pts, NEAR) else {
-        return not_found("degenerate edge points".into());
-    };
-    if (pts.len() as f64) < p.min_support * searched {
-        return not_found(format!(
-            "only {} of {searched} edge points lie on one line",
-            pts.len()
-        ));
+    // Fit, extend along the fitted line while the gradient holds, fit again.
+    EdgePoints {
+        steep,
+        normal: nf,
+        points: pts,
+        gradients: grads,
+        searched,
     }
-    // Extend along the fitted line while the gradient holds, then fit again.
-    grads.sort_by(f32::total_cmp);
-    let stop = (grads[grads.len() / 2] * p.stop_ratio).max(p.min_gradient);
-    let (first, last) = pts.iter().fold((i64::MAX, i64::MIN), |(l, r), q| {
-        (l.min(q[0] as i64), r.max(q[0] as i64))
-    });
-    for dir in [-1i64, 1] {
-        let mut s = if dir < 0 { first - 1 } else { last + 1 };
-        while let Some((t, g)) = peak(
-            grad,
-            steep,
-            nf,
-            s,
-            a * s as f64 + b - NEAR,
-            a * s as f64 + b + NEAR,
-        ) {
-            if g < stop {
-                break;
-            }
-            pts.push([s as f64, t]);
-            s += dir;
-        }
-    }
-    let Some(ab) = robust_fit(&mut pts, NEAR) else {
-        return not_found("degenerate edge points".into());
-    };
-    (a, b) = ab;
-    let (sl, sr) = pts
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, r), q| {
-            (l.min(q[0]), r.max(q[0]))
-        });
-    let rms = (pts
-        .iter()
-        .map(|q| (q[1] - a * q[0] - b).powi(2))
-        .sum::<f64>()
-        / pts.len() as f64)
-        .sqrt();
-    let mut line = Line::through(xy(sl, a * sl + b), xy(sr, a * sr + b), w, h);
-    line.points = pts.len();
-    line.rms = rms;
-    Ok(line)
-}
-
-/// Sub-pixel maximum of the gradient along `n` at major coordinate `s`, t in [lo, hi]
-/// (a parabola through the peak); `None` outside the image.
-fn peak(grad: &Gradient, steep: bool, n: [f32; 2], s: i64, lo: f64, hi: f64) -> Option<(f64, f32)> {
-    let (smax, tmax) = if steep {
-        (grad.height, grad.width)
-    } else {
-        (grad.width, grad.height)
-    };
-    let at = |t: i64| {
-        if steep {
-            grad.along(t, s, n)
-        } else {
-            grad.along(s, t, n)
-        }
-    };
-    let (lo, hi) = (
-        lo.ceil().max(1.0) as i64,
-        hi.floor().min(tmax as f64 - 2.0) as i64,
-    );
-    if s < 1 || s >= smax as i64 - 1 || lo > hi {
-        return None;
-    }
-    let (mut best, mut bt) = (0.0f32, lo);
-    for t in lo..=hi {
-        let g = at(t);
-        if g > best {
-            (best, bt) = (g, t);
-        }
-    }
-    let (gm, gp) = (at(bt - 1), at(bt + 1));
-    let den = gm - 2.0 * best + gp;
-    let dt = if den < 0.0 {
-        (0.5 * (gm - gp) / den).clamp(-0.5, 0.5)
-    } else {
-        0.0
-    };
-    Some((bt as f64 + f64::from(dt), best))
+    .fit(
+        grad,
+        FitParams {
+            min_support: p.min_support,
+            stop_ratio: p.stop_ratio,
+            min_gradient: p.min_gradient,
+        },
+    )
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vision::add_noise;
-    use crate::vision::tests::step;
+    use crate::vision::image::add_noise;
+    use crate::vision::image::tests::step;
 
     const W: usize = 640;
     const H: usize = 480;

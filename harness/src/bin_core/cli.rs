@@ -1,0 +1,274 @@
+//! The command line's grammar (clap): `harness render | scene | trials | sweep | scan |
+//! compare-runs | compare-maps`, and the library options each command's arguments fill.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use harness::campaign::{CampaignOptions, Offsets, VisionMethod};
+use harness::trial::Strategy;
+use harness::vision::Detector;
+
+/// MuJoCo validation harness of ftfusion: scenes, closed-loop trials through FtFusion.fmu,
+/// measured maps.
+#[derive(Debug, Parser)]
+#[command(name = "harness", version)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render the vision camera's image (experiment D) with the expected CAD edges (blue)
+    /// and the detected lines (red) drawn over it; prints each edge's detection.
+    Render {
+        /// Task name or task.toml path (a task whose scene has a camera).
+        #[arg(long, default_value = "bearing_housing")]
+        task: String,
+        /// Output PNG.
+        #[arg(long, default_value = "out/d.png")]
+        out: PathBuf,
+        /// True offset of part B, "x,y" in mm.
+        #[arg(long, default_value = "2,-3", allow_hyphen_values = true)]
+        object_mm: String,
+        /// Task frame (part A), "x,y" in mm; it hangs at the approach height.
+        #[arg(long, default_value = "0,0", allow_hyphen_values = true)]
+        tcp_mm: String,
+        /// Gaussian image noise (grey levels) added before detection.
+        #[arg(long, default_value_t = 0.0)]
+        noise: f64,
+        /// Seed of the noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Line detector.
+        #[arg(long, value_enum, default_value_t = DetectorArg::Gradient)]
+        detector: DetectorArg,
+        /// Only time the detection (both detectors) on this many noisy copies of the image.
+        #[arg(long)]
+        bench: Option<usize>,
+    },
+    /// Write (or check) models_mjcf/<task>/scene.xml from the task's task.toml.
+    Scene {
+        /// Task name or task.toml path; all tasks with a [geometry] table when omitted.
+        #[arg(long)]
+        task: Option<String>,
+        /// Only check that the committed scenes are current (exit 1 if not).
+        #[arg(long)]
+        check: bool,
+    },
+    /// Trial campaign on random true offsets: trials.csv, summary.json, plots.
+    Trials {
+        /// Common settings.
+        #[command(flatten)]
+        run: RunArgs,
+        /// Number of trials.
+        #[arg(long, default_value_t = 20)]
+        trials: usize,
+        /// Half width of the square of true offsets (mm); default: Omega's size_trans.
+        #[arg(long)]
+        range_mm: Option<f64>,
+    },
+    /// Trials on a grid of true offsets; plots contacts per offset (the paper's Fig. 10).
+    Sweep {
+        /// Common settings.
+        #[command(flatten)]
+        run: RunArgs,
+        /// Grid points per axis.
+        #[arg(long, default_value_t = 11)]
+        grid: usize,
+        /// Half width of the grid (mm); default: Omega's size_trans.
+        #[arg(long)]
+        range_mm: Option<f64>,
+    },
+    /// Measure an FT-Map by contact motions in MuJoCo (model `Measured`).
+    Scan {
+        /// Task name or task.toml path.
+        #[arg(long)]
+        task: String,
+        /// Output map file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Grid step (mm).
+        #[arg(long, default_value_t = 0.1)]
+        step: f64,
+        /// Half width of the scanned square (mm); default: Omega's size_trans.
+        #[arg(long)]
+        size: Option<f64>,
+    },
+    /// Two campaigns side by side (their trials.csv): contacts, contact measurements, y
+    /// spread, trial by trial when they ran the same offsets; writes a plot.
+    CompareRuns {
+        /// First campaign's output folder.
+        a: PathBuf,
+        /// Second campaign's output folder.
+        b: PathBuf,
+        /// Bar plot of the contacts per trial.
+        #[arg(long, default_value = "out/compare_runs.png")]
+        plot: PathBuf,
+    },
+    /// Per-channel agreement of two maps over the cells of the first; writes a plot.
+    CompareMaps {
+        /// First map (its cells are compared).
+        a: PathBuf,
+        /// Second map (interpolated at A's cells).
+        b: PathBuf,
+        /// Scatter plot of tx and ty.
+        #[arg(long, default_value = "out/compare_maps.png")]
+        plot: PathBuf,
+    },
+}
+
+/// On or off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Switch {
+    /// On.
+    On,
+    /// Off.
+    Off,
+}
+
+/// The FMU's `vision_method`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum VisionMethodArg {
+    /// Relative feature distances (section III-B-1).
+    Relative,
+    /// Camera recalibration on the passive part (section III-B-2).
+    Recalibration,
+}
+
+/// Which line detector finds the edges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DetectorArg {
+    /// Gradient maxima per row or column, fitted and extended (the paper's Fig. 5).
+    Gradient,
+    /// The bounded Hough transform restricted to the expected area, then the same refinement.
+    Hough,
+}
+
+/// How the next approach point is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StrategyArg {
+    /// Move to the FMU's estimate after each contact (Algorithm 1).
+    Pf,
+    /// An Archimedean spiral of contact motions about the nominal goal.
+    Spiral,
+}
+
+/// Settings shared by `trials` and `sweep`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Task name or task.toml path.
+    #[arg(long)]
+    pub task: String,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Seed of the offsets, the sensor noise and the FMU.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// FT-Map for the FMU (default: the FMU's embedded map for peg_in_hole, else the task's
+    /// map computed from its CAD meshes and cached in target/maps/).
+    #[arg(long)]
+    pub map: Option<PathBuf>,
+    /// Fuse the camera with the F/T sensor (experiment D): an image before the first contact
+    /// and at every contact, its edge features handed to the FMU.
+    #[arg(long)]
+    pub vision: bool,
+    /// How the FMU evaluates particles by vision.
+    #[arg(long, value_enum, default_value_t = VisionMethodArg::Recalibration)]
+    pub vision_method: VisionMethodArg,
+    /// FMU parameter `sigma_vision` (px).
+    #[arg(long)]
+    pub sigma_vision: Option<f64>,
+    /// Gaussian image noise (grey levels) added to each rendered image.
+    #[arg(long, default_value_t = 2.0)]
+    pub image_noise: f64,
+    /// Line detector for the camera's edges.
+    #[arg(long, value_enum, default_value_t = DetectorArg::Gradient)]
+    pub detector: DetectorArg,
+    /// How the next contact point is chosen.
+    #[arg(long, value_enum, default_value_t = StrategyArg::Pf)]
+    pub strategy: StrategyArg,
+    /// Gaussian F/T sensor noise (0.05 N, 2 mN m).
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub sensor_noise: Switch,
+    /// The FMU.
+    #[arg(long, env = "FTFUSION_FMU")]
+    pub fmu: Option<PathBuf>,
+    /// Most contact motions per trial (default: 30 for pf; enough to cover Omega for spiral).
+    #[arg(long)]
+    pub max_contacts: Option<usize>,
+    /// Most simulated time per trial (s; default: 0.3 s per allowed contact).
+    #[arg(long)]
+    pub max_sim_time: Option<f64>,
+    /// FMU parameter `particles`.
+    #[arg(long)]
+    pub particles: Option<i32>,
+    /// FMU parameter `iterations`.
+    #[arg(long)]
+    pub iterations: Option<i32>,
+    /// FMU parameter `sigma_torque` (N m).
+    #[arg(long)]
+    pub sigma_torque: Option<f64>,
+}
+
+impl From<DetectorArg> for Detector {
+    fn from(d: DetectorArg) -> Self {
+        match d {
+            DetectorArg::Gradient => Self::Gradient,
+            DetectorArg::Hough => Self::Hough,
+        }
+    }
+}
+
+impl From<StrategyArg> for Strategy {
+    fn from(s: StrategyArg) -> Self {
+        match s {
+            StrategyArg::Pf => Self::Pf,
+            StrategyArg::Spiral => Self::Spiral,
+        }
+    }
+}
+
+impl From<VisionMethodArg> for VisionMethod {
+    fn from(m: VisionMethodArg) -> Self {
+        match m {
+            VisionMethodArg::Relative => Self::Relative,
+            VisionMethodArg::Recalibration => Self::Recalibration,
+        }
+    }
+}
+
+/// A length in mm on the command line, in m.
+pub fn mm(v: f64) -> f64 {
+    v * 1e-3
+}
+
+impl RunArgs {
+    /// The campaign's options, with its true offsets.
+    pub fn options(self, offsets: Offsets) -> CampaignOptions {
+        CampaignOptions {
+            task: self.task,
+            out: self.out,
+            seed: self.seed,
+            offsets,
+            map: self.map,
+            vision: self.vision,
+            vision_method: self.vision_method.into(),
+            sigma_vision: self.sigma_vision,
+            image_noise: self.image_noise,
+            detector: self.detector.into(),
+            strategy: self.strategy.into(),
+            sensor_noise: self.sensor_noise == Switch::On,
+            fmu: self.fmu,
+            max_contacts: self.max_contacts,
+            max_sim_time: self.max_sim_time,
+            particles: self.particles,
+            iterations: self.iterations,
+            sigma_torque: self.sigma_torque,
+        }
+    }
+}

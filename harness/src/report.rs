@@ -1,0 +1,275 @@
+//! A campaign's records: the table of trials (`trials.csv`, written and read back), the
+//! summary (`summary.json` and a readable table) and the statistics behind them.
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::error::{HarnessError, Result};
+use crate::trial::{Strategy, TrialResult};
+
+/// Statistics of a count per trial.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ContactStats {
+    /// Mean.
+    pub mean: f64,
+    /// Median.
+    pub median: f64,
+    /// 95th percentile (nearest rank).
+    pub p95: f64,
+    /// Maximum.
+    pub max: f64,
+}
+
+/// The summary of a campaign (`summary.json`).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Summary {
+    /// Task name.
+    pub task: String,
+    /// Strategy.
+    pub strategy: Strategy,
+    /// Trials run.
+    pub trials: usize,
+    /// Fraction of trials that reached the goal depth.
+    pub success_rate: f64,
+    /// Contact motions per trial (all trials), the inserting one included.
+    pub contacts: ContactStats,
+    /// Contact measurements per trial: contact motions that did not insert the part.
+    pub measurements: ContactStats,
+    /// Mean `object.y_std` after the first contact measurement (m).
+    pub y_std_first_contact: f64,
+    /// Whether a camera took part (experiment D).
+    pub vision: bool,
+    /// Images in which not all four edges were found (all trials).
+    pub images_missed: usize,
+    /// Mean distance of the last approach point from the true offset (m).
+    pub final_error_mean: f64,
+    /// Largest such distance (m).
+    pub final_error_max: f64,
+    /// Trials per wall-clock second.
+    pub trials_per_second: f64,
+    /// Simulated time over wall-clock time spent in MuJoCo.
+    pub realtime_factor: f64,
+    /// Simulated time over the whole wall-clock time of the trials (FMU included).
+    pub realtime_factor_overall: f64,
+    /// Whether the sensor noise was on.
+    pub sensor_noise: bool,
+}
+
+impl ContactStats {
+    /// Mean, median, p95 and maximum of `values`.
+    pub fn of(mut values: Vec<f64>) -> Self {
+        values.sort_by(f64::total_cmp);
+        Self {
+            mean: values.iter().sum::<f64>() / values.len().max(1) as f64,
+            median: percentile(&values, 0.5),
+            p95: percentile(&values, 0.95),
+            max: values.last().copied().unwrap_or(f64::NAN),
+        }
+    }
+}
+
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[rank - 1]
+}
+
+/// Summarises trial results.
+pub fn summarize(
+    task: &str,
+    strategy: Strategy,
+    sensor_noise: bool,
+    vision: bool,
+    results: &[TrialResult],
+    wall: f64,
+) -> Summary {
+    let n = results.len().max(1) as f64;
+    let first: Vec<f64> = results.iter().filter_map(first_contact_y_std).collect();
+    let sim: f64 = results.iter().map(|r| r.sim_time).sum();
+    let sim_wall: f64 = results.iter().map(|r| r.sim_wall).sum();
+    let trial_wall: f64 = results.iter().map(|r| r.wall).sum();
+    Summary {
+        task: task.to_owned(),
+        strategy,
+        trials: results.len(),
+        success_rate: results.iter().filter(|r| r.success).count() as f64 / n,
+        contacts: ContactStats::of(results.iter().map(|r| r.contacts as f64).collect()),
+        measurements: ContactStats::of(results.iter().map(|r| r.measurements() as f64).collect()),
+        y_std_first_contact: first.iter().sum::<f64>() / first.len().max(1) as f64,
+        vision,
+        images_missed: results.iter().map(|r| r.images_missed).sum(),
+        final_error_mean: results.iter().map(|r| r.final_error).sum::<f64>() / n,
+        final_error_max: results.iter().map(|r| r.final_error).fold(0.0, f64::max),
+        trials_per_second: results.len() as f64 / wall.max(1e-9),
+        realtime_factor: sim / sim_wall.max(1e-9),
+        realtime_factor_overall: sim / trial_wall.max(1e-9),
+        sensor_noise,
+    }
+}
+
+impl Summary {
+    /// A readable table of the summary.
+    pub fn table(&self) -> String {
+        let mm = |m: f64| format!("{:.3} mm", m * 1e3);
+        let rows = [
+            ("task", self.task.clone()),
+            ("strategy", format!("{:?}", self.strategy).to_lowercase()),
+            (
+                "sensor noise",
+                if self.sensor_noise { "on" } else { "off" }.to_owned(),
+            ),
+            (
+                "camera",
+                if self.vision {
+                    format!("on ({} images missed an edge)", self.images_missed)
+                } else {
+                    "off".to_owned()
+                },
+            ),
+            ("trials", self.trials.to_string()),
+            (
+                "success rate",
+                format!("{:.1} %", 100.0 * self.success_rate),
+            ),
+            (
+                "contacts mean / median / p95 / max",
+                format!(
+                    "{:.2} / {} / {} / {}",
+                    self.contacts.mean, self.contacts.median, self.contacts.p95, self.contacts.max
+                ),
+            ),
+            (
+                "contact measurements mean / median / p95 / max",
+                format!(
+                    "{:.2} / {} / {} / {}",
+                    self.measurements.mean,
+                    self.measurements.median,
+                    self.measurements.p95,
+                    self.measurements.max
+                ),
+            ),
+            (
+                "object.y_std after the first contact",
+                mm(self.y_std_first_contact),
+            ),
+            (
+                "final error mean / max",
+                format!(
+                    "{} / {}",
+                    mm(self.final_error_mean),
+                    mm(self.final_error_max)
+                ),
+            ),
+            (
+                "trials per second",
+                format!("{:.2}", self.trials_per_second),
+            ),
+            (
+                "real-time factor (MuJoCo / whole loop)",
+                format!(
+                    "{:.1} x / {:.1} x",
+                    self.realtime_factor, self.realtime_factor_overall
+                ),
+            ),
+        ];
+        let w = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
+        rows.iter()
+            .map(|(k, v)| format!("  {k:<w$}  {v}\n"))
+            .collect()
+    }
+}
+
+/// Writes `trials.csv`: one row per trial.
+///
+/// # Errors
+/// When the file cannot be written.
+pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
+    let io = |source| HarnessError::Csv {
+        path: path.to_owned(),
+        source,
+    };
+    let mut w = csv::Writer::from_path(path).map_err(io)?;
+    w.write_record([
+        "trial",
+        "offset_x_m",
+        "offset_y_m",
+        "contacts",
+        "measurements",
+        "success",
+        "final_error_m",
+        "y_std_first_contact_m",
+        "images_missed",
+        "wall_s",
+        "sim_time_s",
+    ])
+    .map_err(io)?;
+    for (i, r) in results.iter().enumerate() {
+        w.write_record([
+            i.to_string(),
+            format!("{:.9}", r.offset[0]),
+            format!("{:.9}", r.offset[1]),
+            r.contacts.to_string(),
+            r.measurements().to_string(),
+            r.success.to_string(),
+            format!("{:.9}", r.final_error),
+            first_contact_y_std(r).map_or(String::new(), |v| format!("{v:.9}")),
+            r.images_missed.to_string(),
+            format!("{:.4}", r.wall),
+            format!("{:.4}", r.sim_time),
+        ])
+        .map_err(io)?;
+    }
+    w.flush().map_err(|e| HarnessError::io(path, e))
+}
+
+/// One row of a `trials.csv`, read back (the columns a comparison needs).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+pub struct TrialRow {
+    /// True offset x (m).
+    pub offset_x_m: f64,
+    /// True offset y (m).
+    pub offset_y_m: f64,
+    /// Contact motions.
+    pub contacts: usize,
+    /// Contact measurements.
+    pub measurements: usize,
+    /// Whether the part went in.
+    pub success: bool,
+    /// `object.y_std` after the first contact measurement (m), if there was one.
+    pub y_std_first_contact_m: Option<f64>,
+}
+
+/// Reads a campaign's `trials.csv`.
+///
+/// # Errors
+/// When the file cannot be read or a row lacks a column or holds a malformed value.
+pub fn read_trials_csv(path: &Path) -> Result<Vec<TrialRow>> {
+    let bad = |source| HarnessError::Csv {
+        path: path.to_owned(),
+        source,
+    };
+    let mut r = csv::Reader::from_path(path).map_err(bad)?;
+    r.deserialize()
+        .collect::<std::result::Result<Vec<TrialRow>, _>>()
+        .map_err(bad)
+}
+
+/// `object.y_std` after a trial's first contact measurement.
+fn first_contact_y_std(r: &TrialResult) -> Option<f64> {
+    r.steps.iter().find_map(|s| s.estimate).map(|e| e.std[1])
+}
+
+/// Writes `summary.json`.
+///
+/// # Errors
+/// When the file cannot be written.
+pub fn write_summary(path: &Path, s: &Summary) -> Result<()> {
+    let text = serde_json::to_string_pretty(s).map_err(|source| HarnessError::Json {
+        path: path.to_owned(),
+        source,
+    })?;
+    std::fs::write(path, text + "\n").map_err(|e| HarnessError::io(path, e))
+}
