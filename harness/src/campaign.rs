@@ -14,6 +14,7 @@ use rand::{Rng, SeedableRng};
 use ftmap::Task;
 use ftmap::task::cad::Geometry;
 
+use crate::calibration;
 use crate::error::{HarnessError, Result, create_dir};
 use crate::eye::Eye;
 use crate::fmu_driver::{Fmu, Settings, default_fmu_path};
@@ -270,6 +271,10 @@ impl Campaign {
         let out = &self.options.out;
         create_dir(out)?;
         report::write_trials_csv(&out.join("trials.csv"), &outcome.results)?;
+        report::write_measurements_csv(
+            &out.join("measurements.csv"),
+            &calibration::samples(&outcome.results),
+        )?;
         let summary = report::summarize(
             &self.task.name,
             self.options.strategy,

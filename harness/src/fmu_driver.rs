@@ -46,7 +46,7 @@ pub struct Settings {
 }
 
 /// The FMU's estimate after a measurement.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Estimate {
     /// `object.x`, `object.y` (m).
     pub object: [f64; 2],

@@ -8,11 +8,13 @@
 //!   pipeline (image primitives, the gradient and Hough line detectors, features);
 //!   [`eye`], the camera as a trial's second sensor;
 //! - [`fmu_driver`], `FtFusion.fmu` through FMI calls; [`trial`], one trial (Algorithm 1 or
-//!   the spiral search); [`campaign`], campaigns set up and run; [`report`], `trials.csv`
-//!   and `summary.json`; [`plot`], the plots;
+//!   the spiral search); [`campaign`], campaigns set up and run; [`report`], `trials.csv`,
+//!   `measurements.csv` and `summary.json`; [`calibration`], whether the reported spread
+//!   tells the truth; [`plot`], the plots;
 //! - [`scan`], measured maps; [`compare`], two maps' agreement and two campaigns side by
 //!   side; [`render`], one camera image with its edges, and the detectors' timing.
 
+pub mod calibration;
 pub mod camera;
 pub mod campaign;
 pub mod compare;

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use crate::calibration::{self, Calibration, Sample};
 use crate::error::{HarnessError, Result};
 use crate::trial::{Strategy, TrialResult};
 
@@ -38,6 +39,9 @@ pub struct Summary {
     pub measurements: ContactStats,
     /// Mean `object.y_std` after the first contact measurement (m).
     pub y_std_first_contact: f64,
+    /// Whether the reported spreads are calibrated, over every contact measurement; `None`
+    /// without the estimator.
+    pub calibration: Option<Calibration>,
     /// Whether a camera took part (experiment D).
     pub vision: bool,
     /// Images in which not all four edges were found (all trials).
@@ -99,6 +103,9 @@ pub fn summarize(
         contacts: ContactStats::of(results.iter().map(|r| r.contacts as f64).collect()),
         measurements: ContactStats::of(results.iter().map(|r| r.measurements() as f64).collect()),
         y_std_first_contact: first.iter().sum::<f64>() / first.len().max(1) as f64,
+        calibration: Some(calibration::samples(results))
+            .filter(|s| !s.is_empty())
+            .map(|s| Calibration::of(&s)),
         vision,
         images_missed: results.iter().map(|r| r.images_missed).sum(),
         final_error_mean: results.iter().map(|r| r.final_error).sum::<f64>() / n,
@@ -154,6 +161,12 @@ impl Summary {
             (
                 "object.y_std after the first contact",
                 mm(self.y_std_first_contact),
+            ),
+            (
+                "true offset within 1 / 2 sigma",
+                self.calibration
+                    .as_ref()
+                    .map_or("n/a (no estimator)".to_owned(), Calibration::line),
             ),
             (
                 "final error mean / max",
@@ -219,6 +232,56 @@ pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
             r.images_missed.to_string(),
             format!("{:.4}", r.wall),
             format!("{:.4}", r.sim_time),
+        ])
+        .map_err(io)?;
+    }
+    w.flush().map_err(|e| HarnessError::io(path, e))
+}
+
+/// Writes `measurements.csv`: one row per contact measurement, with the estimate, its
+/// reported spread and the true offset (what the calibration is computed from).
+///
+/// # Errors
+/// When the file cannot be written.
+pub fn write_measurements_csv(path: &Path, samples: &[Sample]) -> Result<()> {
+    let io = |source| HarnessError::Csv {
+        path: path.to_owned(),
+        source,
+    };
+    let mut w = csv::Writer::from_path(path).map_err(io)?;
+    w.write_record([
+        "trial",
+        "measurement",
+        "image",
+        "true_x_m",
+        "true_y_m",
+        "object_x_m",
+        "object_y_m",
+        "object_x_std_m",
+        "object_y_std_m",
+        "confidence",
+        "clusters",
+        "converged",
+        "nees",
+    ])
+    .map_err(io)?;
+    for s in samples {
+        let e = &s.estimate;
+        let m = |v: f64| format!("{v:.9}");
+        w.write_record([
+            s.trial.to_string(),
+            s.measurement.to_string(),
+            s.image.to_string(),
+            m(s.truth[0]),
+            m(s.truth[1]),
+            m(e.object[0]),
+            m(e.object[1]),
+            format!("{:.12}", e.std[0]),
+            format!("{:.12}", e.std[1]),
+            format!("{:.4}", e.confidence),
+            e.clusters.to_string(),
+            e.converged.to_string(),
+            format!("{:.6}", s.nees()),
         ])
         .map_err(io)?;
     }

@@ -1,0 +1,206 @@
+//! Whether the estimator's reported spread tells the truth: for every contact measurement,
+//! the error of the estimate against the true offset in units of the reported spread
+//! (`object.x_std`, `object.y_std`), the fraction of measurements whose true offset lies
+//! within the 1- and 2-sigma regions, and the normalised estimation error squared (NEES).
+//!
+//! The FMU reports a spread per DOF and no correlation, so the region is the axis-aligned
+//! ellipse with those half-axes. For a calibrated 2-D Gaussian estimate, the true offset lies
+//! within the 1-sigma ellipse in 1 - e^(-1/2) = 39.3 % of measurements and within the
+//! 2-sigma ellipse in 1 - e^(-2) = 86.5 %; per DOF within 1 and 2 sigma in 68.3 % and 95.4 %;
+//! and the NEES, the sum over the DOFs of (error / sigma)^2, has mean 2 (the DOF count).
+
+use serde::Serialize;
+
+use crate::fmu_driver::Estimate;
+use crate::trial::TrialResult;
+
+/// Spreads below this (m) count as this: a collapsed spread gives a huge, not an infinite,
+/// NEES.
+pub const MIN_STD: f64 = 1e-9;
+
+/// Names of the DOFs an [`Estimate`] holds, in its order.
+pub const DOFS: [&str; 2] = ["object.x", "object.y"];
+
+/// One contact measurement: the estimate after it and the truth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Trial index in the campaign.
+    pub trial: usize,
+    /// 1 for the trial's first contact measurement, 2 for the second, ...
+    pub measurement: usize,
+    /// Whether an image went with the wrench.
+    pub image: bool,
+    /// The true offset (m).
+    pub truth: [f64; 2],
+    /// The FMU's outputs after the measurement.
+    pub estimate: Estimate,
+}
+
+impl Sample {
+    /// Error of the estimate in units of the reported spread, per DOF.
+    pub fn z(&self) -> [f64; 2] {
+        std::array::from_fn(|k| {
+            (self.estimate.object[k] - self.truth[k]) / self.estimate.std[k].max(MIN_STD)
+        })
+    }
+
+    /// The normalised estimation error squared.
+    pub fn nees(&self) -> f64 {
+        self.z().iter().map(|z| z * z).sum()
+    }
+}
+
+/// Every contact measurement of a campaign, in trial order.
+pub fn samples(results: &[TrialResult]) -> Vec<Sample> {
+    results
+        .iter()
+        .enumerate()
+        .flat_map(|(trial, r)| {
+            r.steps
+                .iter()
+                .filter_map(|s| s.estimate.map(|e| (s.image, e)))
+                .enumerate()
+                .map(move |(k, (image, estimate))| Sample {
+                    trial,
+                    measurement: k + 1,
+                    image,
+                    truth: r.offset,
+                    estimate,
+                })
+        })
+        .collect()
+}
+
+/// The calibration of one DOF's spread.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct DofCalibration {
+    /// The DOF (`object.x`, ...).
+    pub dof: &'static str,
+    /// Fraction of measurements with |error| <= 1 sigma (ideal 0.683).
+    pub within_1sigma: f64,
+    /// Fraction with |error| <= 2 sigma (ideal 0.954).
+    pub within_2sigma: f64,
+}
+
+/// The calibration of a campaign's reported spreads (`summary.json`'s `calibration`).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Calibration {
+    /// Contact measurements counted.
+    pub measurements: usize,
+    /// Fraction of measurements whose true offset lies within the 1-sigma ellipse (ideal 0.393).
+    pub within_1sigma: f64,
+    /// Fraction within the 2-sigma ellipse (ideal 0.865).
+    pub within_2sigma: f64,
+    /// Per DOF.
+    pub per_dof: Vec<DofCalibration>,
+    /// Mean NEES (ideal: the DOF count).
+    pub nees_mean: f64,
+    /// The ideal mean NEES: the number of DOFs.
+    pub nees_ideal: f64,
+}
+
+impl Calibration {
+    /// The calibration of `samples`; fractions and the mean are NaN when there are none.
+    pub fn of(samples: &[Sample]) -> Self {
+        let n = samples.len() as f64;
+        let fraction = |inside: &dyn Fn(&Sample) -> bool| {
+            samples.iter().filter(|s| inside(s)).count() as f64 / n
+        };
+        let per_dof = DOFS
+            .iter()
+            .enumerate()
+            .map(|(k, &dof)| DofCalibration {
+                dof,
+                within_1sigma: fraction(&|s| s.z()[k].abs() <= 1.0),
+                within_2sigma: fraction(&|s| s.z()[k].abs() <= 2.0),
+            })
+            .collect();
+        Self {
+            measurements: samples.len(),
+            within_1sigma: fraction(&|s| s.nees() <= 1.0),
+            within_2sigma: fraction(&|s| s.nees() <= 4.0),
+            per_dof,
+            nees_mean: samples.iter().map(Sample::nees).sum::<f64>() / n,
+            nees_ideal: DOFS.len() as f64,
+        }
+    }
+
+    /// One line for the summary table.
+    pub fn line(&self) -> String {
+        let pct = |f: f64| format!("{:.1} %", 100.0 * f);
+        format!(
+            "{} / {} (ideal 39.3 / 86.5 %), NEES mean {:.2} (ideal {}) over {} measurements",
+            pct(self.within_1sigma),
+            pct(self.within_2sigma),
+            self.nees_mean,
+            self.nees_ideal,
+            self.measurements
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(error: [f64; 2], std: [f64; 2]) -> Sample {
+        Sample {
+            trial: 0,
+            measurement: 1,
+            image: false,
+            truth: [1e-3, -2e-3],
+            estimate: Estimate {
+                object: [1e-3 + error[0], -2e-3 + error[1]],
+                std,
+                ..Estimate::default()
+            },
+        }
+    }
+
+    #[test]
+    fn a_gaussian_estimate_with_its_true_spread_is_calibrated() {
+        // Errors drawn from the reported spread itself: a deterministic low-discrepancy
+        // sample of the 2-D normal (Box-Muller on a Halton sequence).
+        let halton = |mut i: u32, b: u32| {
+            let (mut f, mut r) = (1.0, 0.0);
+            while i > 0 {
+                f /= f64::from(b);
+                r += f * f64::from(i % b);
+                i /= b;
+            }
+            r
+        };
+        let std = [2e-5, 5e-5];
+        let samples: Vec<Sample> = (1..20_000)
+            .map(|i| {
+                let (u, v) = (halton(i, 2), halton(i, 3));
+                let r = (-2.0 * u.ln()).sqrt();
+                let t = std::f64::consts::TAU * v;
+                sample([std[0] * r * t.cos(), std[1] * r * t.sin()], std)
+            })
+            .collect();
+        let c = Calibration::of(&samples);
+        let near = |got: f64, want: f64| (got - want).abs() < 0.01;
+        assert!(near(c.within_1sigma, 1.0 - (-0.5f64).exp()), "{c:?}");
+        assert!(near(c.within_2sigma, 1.0 - (-2.0f64).exp()), "{c:?}");
+        for d in &c.per_dof {
+            assert!(
+                near(d.within_1sigma, 0.6827) && near(d.within_2sigma, 0.9545),
+                "{d:?}"
+            );
+        }
+        assert!((c.nees_mean - 2.0).abs() < 0.05, "{c:?}");
+    }
+
+    #[test]
+    fn an_overconfident_spread_is_seen() {
+        // The true error 3 sigma off in x: outside both ellipses, NEES 9.
+        let c = Calibration::of(&[sample([3e-5, 0.0], [1e-5, 1e-5])]);
+        assert_eq!((c.within_1sigma, c.within_2sigma), (0.0, 0.0));
+        assert!((c.nees_mean - 9.0).abs() < 1e-9, "{c:?}");
+        assert_eq!(c.per_dof[1].within_1sigma, 1.0);
+        // A collapsed spread counts as MIN_STD, not as zero.
+        let collapsed = Calibration::of(&[sample([1e-6, 0.0], [0.0, 0.0])]);
+        assert!(collapsed.nees_mean.is_finite() && collapsed.nees_mean > 1e5);
+    }
+}
