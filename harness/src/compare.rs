@@ -1,6 +1,7 @@
 //! Comparisons: the agreement of two FT-Maps over the cells of the first (per channel the
-//! sign agreement, the correlation and the RMS difference, and the mean angle between torque
-//! directions), and two campaigns' trials side by side.
+//! sign agreement, the correlation and the RMS difference, overall and per region of
+//! contact physics: centre, rim, outside; and the mean angle between torque directions),
+//! and two campaigns' trials side by side.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -30,40 +31,129 @@ pub struct ChannelAgreement {
     pub rms: f64,
 }
 
+/// Where on the map a cell lies, by the contact the reference map (the computed one of the
+/// two, else A) has there: regions of different contact physics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Region {
+    /// The part goes in: the contact depth is below half the deepest of the compared cells.
+    Centre,
+    /// The part rests on an edge: torque magnitude above [`TORQUE_FLOOR`].
+    Rim,
+    /// The part rests flat on a surface: no torque.
+    Outside,
+}
+
+impl Region {
+    /// Every region, in table order.
+    pub const ALL: [Self; 3] = [Self::Centre, Self::Rim, Self::Outside];
+
+    /// The region's name in tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Centre => "centre",
+            Self::Rim => "rim",
+            Self::Outside => "outside",
+        }
+    }
+
+    /// The region of a cell whose reference values are `v`; `deepest` is the largest
+    /// contact depth of the compared cells (m).
+    fn of(v: &[f64; NCH], deepest: f64) -> Self {
+        if v[6] < 0.5 * deepest {
+            Self::Centre
+        } else if v[3].hypot(v[4]) > TORQUE_FLOOR {
+            Self::Rim
+        } else {
+            Self::Outside
+        }
+    }
+}
+
+/// The agreement of the two maps within one region.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionAgreement {
+    /// The region.
+    pub region: Region,
+    /// One entry per channel.
+    pub channels: Vec<ChannelAgreement>,
+}
+
+/// Where one compared cell lies and how far the maps' torques differ there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CellDifference {
+    /// The cell's coordinates on the first two grid axes (SI).
+    pub at: [f64; 2],
+    /// Its region.
+    pub region: Region,
+    /// |(tx, ty) of B - (tx, ty) of A| (N m).
+    pub torque: f64,
+}
+
 /// The agreement of two maps.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Agreement {
-    /// One entry per channel.
+    /// One entry per channel, over every compared cell.
     pub channels: Vec<ChannelAgreement>,
+    /// The same per region.
+    pub regions: Vec<RegionAgreement>,
     /// Mean angle between the (tx, ty) vectors where both exceed the floor (rad).
     pub torque_angle_mean: f64,
     /// Largest such angle (rad).
     pub torque_angle_max: f64,
     /// (a, b) pairs per channel, for plots.
     pub pairs: Vec<Vec<(f64, f64)>>,
+    /// Every compared cell, for the plot of where the maps disagree.
+    pub cells: Vec<CellDifference>,
+    /// Names of the grid's first two axes, along which `cells` lie.
+    pub axes: [String; 2],
 }
 
-/// Compares `b` with `a` at every cell of `a` that lies inside `b`'s grid.
+/// Compares `b` with `a` at every cell of `a` that lies inside `b`'s grid; regions are
+/// judged by `b` when only `a` is a measured map, else by `a`.
 ///
 /// # Errors
 /// When the maps' grids have different DOFs.
 pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
-    let mut pairs: Vec<Vec<(f64, f64)>> = vec![Vec::new(); NCH];
-    let (mut angle_sum, mut angle_max, mut angles) = (0.0, 0.0f64, 0usize);
+    let mut compared: Vec<([f64; 2], [f64; NCH], [f64; NCH])> = Vec::new();
     for cell in 0..a.grid().cells() {
         let c = a.grid().coords(cell);
         if !b.grid().contains(&c) {
             continue;
         }
-        let vb = b.interpolate(&c)?;
-        let va = a.cell(cell);
+        let at = [
+            c.first().copied().unwrap_or(0.0),
+            c.get(1).copied().unwrap_or(0.0),
+        ];
+        compared.push((at, a.cell(cell).map(f64::from), b.interpolate(&c)?));
+    }
+    let b_is_reference =
+        a.meta().model == WrenchModel::Measured && b.meta().model != WrenchModel::Measured;
+    let reference = |va: &[f64; NCH], vb: &[f64; NCH]| if b_is_reference { *vb } else { *va };
+    let deepest = compared
+        .iter()
+        .map(|(_, va, vb)| reference(va, vb)[6])
+        .filter(|d| d.is_finite())
+        .fold(0.0, f64::max);
+    let mut pairs: Vec<Vec<(f64, f64)>> = vec![Vec::new(); NCH];
+    let mut by_region: Vec<Vec<Vec<(f64, f64)>>> = vec![vec![Vec::new(); NCH]; Region::ALL.len()];
+    let mut cells = Vec::with_capacity(compared.len());
+    let (mut angle_sum, mut angle_max, mut angles) = (0.0, 0.0f64, 0usize);
+    for (at, va, vb) in &compared {
+        let region = Region::of(&reference(va, vb), deepest);
+        let r = Region::ALL.iter().position(|&x| x == region).unwrap_or(0);
         for k in 0..NCH {
-            let (x, y) = (f64::from(va[k]), vb[k]);
+            let (x, y) = (va[k], vb[k]);
             if x.is_finite() && y.is_finite() {
                 pairs[k].push((x, y));
+                by_region[r][k].push((x, y));
             }
         }
-        let (ta, tb) = ([f64::from(va[3]), f64::from(va[4])], [vb[3], vb[4]]);
+        let (ta, tb) = ([va[3], va[4]], [vb[3], vb[4]]);
+        cells.push(CellDifference {
+            at: *at,
+            region,
+            torque: (tb[0] - ta[0]).hypot(tb[1] - ta[1]),
+        });
         let (na, nb) = (ta[0].hypot(ta[1]), tb[0].hypot(tb[1]));
         if na > TORQUE_FLOOR && nb > TORQUE_FLOOR {
             let cos = ((ta[0] * tb[0] + ta[1] * tb[1]) / (na * nb)).clamp(-1.0, 1.0);
@@ -73,7 +163,37 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
             angles += 1;
         }
     }
-    let channels = pairs
+    let mean = if angles == 0 {
+        f64::NAN
+    } else {
+        angle_sum / angles as f64
+    };
+    Ok(Agreement {
+        channels: channel_agreements(&pairs),
+        regions: Region::ALL
+            .iter()
+            .zip(&by_region)
+            .map(|(&region, p)| RegionAgreement {
+                region,
+                channels: channel_agreements(p),
+            })
+            .collect(),
+        torque_angle_mean: mean,
+        torque_angle_max: angle_max,
+        pairs,
+        cells,
+        axes: std::array::from_fn(|k| {
+            a.grid()
+                .axes()
+                .get(k)
+                .map_or_else(|| "-".to_owned(), |x| x.dof.to_string())
+        }),
+    })
+}
+
+/// Sign agreement, correlation and RMS difference of each channel's (a, b) pairs.
+fn channel_agreements(pairs: &[Vec<(f64, f64)>]) -> Vec<ChannelAgreement> {
+    pairs
         .iter()
         .enumerate()
         .map(|(k, p)| {
@@ -103,18 +223,7 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
                     .sqrt(),
             }
         })
-        .collect();
-    let mean = if angles == 0 {
-        f64::NAN
-    } else {
-        angle_sum / angles as f64
-    };
-    Ok(Agreement {
-        channels,
-        torque_angle_mean: mean,
-        torque_angle_max: angle_max,
-        pairs,
-    })
+        .collect()
 }
 
 fn correlation(p: &[(f64, f64)]) -> f64 {
@@ -140,17 +249,19 @@ fn correlation(p: &[(f64, f64)]) -> f64 {
 }
 
 impl Agreement {
-    /// A readable table.
+    /// A readable table: every channel over all compared cells, then the force and torque
+    /// channels across a per region.
     pub fn table(&self) -> String {
         let mut s = format!(
-            "  {:<7} {:>7} {:>14} {:>12} {:>12}\n",
-            "channel", "cells", "sign agreement", "correlation", "RMS diff"
+            "  {:<8} {:<7} {:>7} {:>14} {:>12} {:>12}\n",
+            "region", "channel", "cells", "sign agreement", "correlation", "RMS diff"
         );
         // NaN: a channel without signs (all zero in a map) or without spread: say so.
         let or_na = |v: f64, text: String| if v.is_nan() { "n/a".to_owned() } else { text };
-        for c in &self.channels {
-            s += &format!(
-                "  {:<7} {:>7} {:>14} {:>12} {:>12.4}\n",
+        let row = |region: &str, c: &ChannelAgreement| {
+            format!(
+                "  {:<8} {:<7} {:>7} {:>14} {:>12} {:>12.4}\n",
+                region,
                 c.name,
                 c.cells,
                 or_na(
@@ -159,7 +270,19 @@ impl Agreement {
                 ),
                 or_na(c.correlation, format!("{:.3}", c.correlation)),
                 c.rms
-            );
+            )
+        };
+        for c in &self.channels {
+            s += &row("all", c);
+        }
+        for r in &self.regions {
+            for c in r
+                .channels
+                .iter()
+                .filter(|c| ["fx", "fy", "tx", "ty"].contains(&c.name))
+            {
+                s += &row(r.region.name(), c);
+            }
         }
         s += &format!(
             "  torque direction (tx, ty) angle: mean {:.1} deg, max {:.1} deg\n",
@@ -195,16 +318,26 @@ impl MapComparison {
         })
     }
 
-    /// Scatter plot of tx and ty, B against A.
+    /// Scatter plot of tx and ty, B against A, and where on the map their torques differ.
     ///
     /// # Errors
     /// When the image cannot be written.
     pub fn plot(&self, png: &Path) -> Result<()> {
+        let differences: Vec<([f64; 2], f64)> = self
+            .agreement
+            .cells
+            .iter()
+            .map(|c| (c.at, c.torque))
+            .collect();
         plot::agreement(
             png,
             &["tx [N m]", "ty [N m]"],
             &self.agreement.pairs[3..5],
             ["A", "B"],
+            (
+                &differences,
+                [&self.agreement.axes[0], &self.agreement.axes[1]],
+            ),
         )
     }
 }

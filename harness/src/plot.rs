@@ -285,7 +285,9 @@ fn draw_sweep(path: &Path, results: &[TrialResult], size: f64, cell: f64) -> Dra
     Ok(())
 }
 
-/// Scatter of two maps' values of the channels `names`, one panel each, with y = x.
+/// Scatter of two maps' values of the channels `names`, one panel each, with y = x, and a
+/// last panel of `differences` (the torque difference at each cell's first two coordinates,
+/// m, with those axes' names) over the map: where the maps disagree.
 ///
 /// # Errors
 /// When the image cannot be written.
@@ -294,9 +296,13 @@ pub fn agreement(
     names: &[&str],
     pairs: &[Vec<(f64, f64)>],
     labels: [&str; 2],
+    differences: (&[([f64; 2], f64)], [&str; 2]),
 ) -> Result<()> {
     create_parent(path)?;
-    wrap(path, draw_agreement(path, names, pairs, labels))
+    wrap(
+        path,
+        draw_agreement(path, names, pairs, labels, differences),
+    )
 }
 
 fn draw_agreement(
@@ -304,10 +310,13 @@ fn draw_agreement(
     names: &[&str],
     pairs: &[Vec<(f64, f64)>],
     labels: [&str; 2],
+    differences: (&[([f64; 2], f64)], [&str; 2]),
 ) -> Draw {
-    let root = BitMapBackend::new(path, (520 * names.len().max(1) as u32, 520)).into_drawing_area();
+    let n = names.len() + 1;
+    let root = BitMapBackend::new(path, (520 * n as u32, 520)).into_drawing_area();
     root.fill(&WHITE)?;
-    let panels = root.split_evenly((1, names.len().max(1)));
+    let panels = root.split_evenly((1, n));
+    draw_differences(&panels[n - 1], differences.0, differences.1)?;
     for ((area, name), pts) in panels.iter().zip(names).zip(pairs) {
         let m = pts
             .iter()
@@ -332,5 +341,70 @@ fn draw_agreement(
         )?;
     }
     root.present()?;
+    Ok(())
+}
+
+/// The torque difference over the map's first two axes (mm), one square per cell, darker
+/// where the maps disagree more (scale: white 0 to black at the 99th percentile, so that a
+/// few extreme cells do not wash out the rest).
+fn draw_differences(
+    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    cells: &[([f64; 2], f64)],
+    axes: [&str; 2],
+) -> Draw {
+    let (lo, hi) = cells.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), (at, _)| {
+            (
+                [lo[0].min(at[0]), lo[1].min(at[1])],
+                [hi[0].max(at[0]), hi[1].max(at[1])],
+            )
+        },
+    );
+    if !(lo[0] < hi[0] && lo[1] < hi[1]) {
+        return Ok(());
+    }
+    let mut sorted: Vec<f64> = cells
+        .iter()
+        .map(|c| c.1)
+        .filter(|d| d.is_finite())
+        .collect();
+    sorted.sort_by(f64::total_cmp);
+    let top = sorted
+        .get((sorted.len() * 99 / 100).min(sorted.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(0.0)
+        .max(1e-12);
+    // Half a cell: the grid step estimated from the extent and the cell count.
+    let side = (cells.len() as f64).sqrt().max(2.0) - 1.0;
+    let half = [(hi[0] - lo[0]) / side / 2.0, (hi[1] - lo[1]) / side / 2.0];
+    let mm = |v: f64| v * 1e3;
+    let mut chart = ChartBuilder::on(area)
+        .caption(
+            format!("|torque B - A|, black >= {top:.3} N m"),
+            ("sans-serif", 20),
+        )
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            mm(lo[0] - half[0])..mm(hi[0] + half[0]),
+            mm(lo[1] - half[1])..mm(hi[1] + half[1]),
+        )?;
+    chart
+        .configure_mesh()
+        .x_desc(format!("{} [mm]", axes[0]))
+        .y_desc(format!("{} [mm]", axes[1]))
+        .draw()?;
+    chart.draw_series(cells.iter().map(|(at, d)| {
+        let shade = (255.0 * (1.0 - d / top)).round().clamp(0.0, 255.0) as u8;
+        Rectangle::new(
+            [
+                (mm(at[0] - half[0]), mm(at[1] - half[1])),
+                (mm(at[0] + half[0]), mm(at[1] + half[1])),
+            ],
+            RGBColor(shade, shade, shade).filled(),
+        )
+    }))?;
     Ok(())
 }

@@ -2,7 +2,7 @@
 
 mod common;
 
-use harness::compare::compare;
+use harness::compare::{Region, compare};
 use harness::scan::scan;
 
 #[test]
@@ -17,6 +17,22 @@ fn a_scan_of_a_small_grid_agrees_in_sign_with_the_computed_map() {
         assert!(ch.correlation > 0.95, "{}: {}", ch.name, a.table());
     }
     assert!(a.torque_angle_max < 5f64.to_radians(), "{}", a.table());
+    // Regions by the computed map: on this 1 mm grid over ±3 mm only the centred peg goes in
+    // (0.05 mm clearance), and every other offset (at most 4.3 mm) puts the 9.9 mm peg over
+    // the 10 mm hole's edge: no cell rests flat on the top face.
+    let cells_in = |region| a.cells.iter().filter(|c| c.region == region).count();
+    assert_eq!(
+        [Region::Centre, Region::Rim, Region::Outside].map(cells_in),
+        [1, 48, 0],
+        "{}",
+        a.table()
+    );
+    let centre = &a.regions[0];
+    assert_eq!(
+        (centre.region, centre.channels[3].cells),
+        (Region::Centre, 1)
+    );
+    assert_eq!(a.axes, ["object.x", "object.y"]);
     // Round trip through the map file format.
     let dir = std::env::temp_dir().join(format!("harness-scan-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
