@@ -160,9 +160,9 @@ pub fn generate_with(
     opts: &GenerateOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<FtMap> {
-    if opts.model == WrenchModel::Measured {
+    if !opts.model.is_computed() {
         return Err(MapError::Geometry(
-            "a measured map comes from contact motions (`harness scan`), not from CAD: use --model paper or centroid".into(),
+            "measured and blended maps come from contact motions (`harness scan`, `ftmap blend`), not from CAD: use --model paper or centroid".into(),
         ));
     }
     let grid = task.grid()?;

@@ -19,6 +19,16 @@ pub enum WrenchModel {
     Centroid,
     /// Scanned by contact motions in a (simulated) work cell.
     Measured,
+    /// Computed from CAD and corrected by a sparse measured map ([`crate::map::blend`]).
+    Blended,
+}
+
+impl WrenchModel {
+    /// Whether the wrench is computed from CAD by this model (paper, centroid), rather than
+    /// measured or blended.
+    pub fn is_computed(self) -> bool {
+        matches!(self, Self::Paper | Self::Centroid)
+    }
 }
 
 /// Everything about a configuration the wrench models need besides its contacts.
@@ -78,7 +88,8 @@ impl WrenchSetup {
                     Some(k) => self.view.unproject([k.x, k.y, mean_h]),
                 }
             }
-            WrenchModel::Centroid | WrenchModel::Measured => {
+            // Only the computed models reach here (`generate` refuses the others).
+            WrenchModel::Centroid | WrenchModel::Measured | WrenchModel::Blended => {
                 let (u, v) = self.lattice_to_view(c.sum_col / n, c.sum_row / n);
                 self.view.unproject([u, v, mean_h])
             }

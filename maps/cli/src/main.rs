@@ -110,6 +110,17 @@ enum Cmd {
         #[arg(long, env = "FTMAP_REQUIRE_GPU")]
         require_gpu: bool,
     },
+    /// Corrects a computed map by a sparse measured one (`harness scan --step`): the residual
+    /// measured - computed at the measured cells, interpolated over the computed grid.
+    Blend {
+        /// The map computed from CAD.
+        computed: PathBuf,
+        /// The measured map (same DOFs, any step).
+        measured: PathBuf,
+        /// Output map file.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Joins the shard files of one computation into the whole map.
     Merge {
         shards: Vec<PathBuf>,
@@ -183,6 +194,11 @@ fn main() -> Result<()> {
             model,
             require_gpu,
         } => cmd_bench(&task, &backend, model.into(), require_gpu),
+        Cmd::Blend {
+            computed,
+            measured,
+            out,
+        } => cmd_blend(&computed, &measured, &out),
         Cmd::Merge { shards, out } => cmd_merge(&shards, &out),
         Cmd::Vision { task, out } => cmd_vision(&task, &out),
         Cmd::Cad { task, check } => cmd_cad(&task, check),
@@ -483,6 +499,20 @@ fn cmd_merge(shards: &[PathBuf], out: &Path) -> Result<()> {
     let map = merge(parts)?;
     format::save(&map, out)?;
     println!("{} shards -> {}", shards.len(), out.display());
+    Ok(())
+}
+
+fn cmd_blend(computed: &Path, measured: &Path, out: &Path) -> Result<()> {
+    let (c, m) = (format::load(computed)?, format::load(measured)?);
+    let blended = ftmap::map::blend::blend(&c, &m)?;
+    format::save(&blended, out)?;
+    println!(
+        "{} corrected by {} ({} measured cells) -> {}",
+        computed.display(),
+        measured.display(),
+        m.grid().cells(),
+        out.display()
+    );
     Ok(())
 }
 

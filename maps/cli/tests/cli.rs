@@ -263,3 +263,55 @@ fn vision_writes_the_tasks_model_and_refuses_a_task_without_a_camera() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn blend_corrects_a_computed_map_by_a_measured_one() {
+    let (dir, task) = scratch("blend");
+    let computed = dir.join("peg.ftmap");
+    ok(&[
+        "generate",
+        "--task",
+        task.to_str().unwrap(),
+        "--out",
+        computed.to_str().unwrap(),
+    ]);
+    // A "measured" map on the same cells whose tx is 0.01 N m larger everywhere.
+    let c = ftmap::map::format::load(&computed).unwrap();
+    let mut data = c.data().to_vec();
+    for cell in data.chunks_exact_mut(ftmap::NCH) {
+        cell[3] += 0.01;
+    }
+    let meta = ftmap::MapMeta {
+        model: ftmap::WrenchModel::Measured,
+        ..c.meta().clone()
+    };
+    let m = ftmap::FtMap::from_data(c.grid().clone(), meta, data).unwrap();
+    let measured = dir.join("measured.ftmap");
+    ftmap::map::format::save(&m, &measured).unwrap();
+    let blended = dir.join("blended.ftmap");
+    let out = ok(&[
+        "blend",
+        computed.to_str().unwrap(),
+        measured.to_str().unwrap(),
+        "--out",
+        blended.to_str().unwrap(),
+    ]);
+    assert!(out.contains("25 measured cells"), "{out}");
+    let b = ftmap::map::format::load(&blended).unwrap();
+    assert_eq!(b.meta().model, ftmap::WrenchModel::Blended);
+    for (x, y) in b.data().iter().zip(m.data()) {
+        assert!((x - y).abs() < 1e-6, "{x} vs {y}");
+    }
+    assert!(ok(&["info", blended.to_str().unwrap()]).contains("Blended"));
+    // Two computed maps are refused, naming why.
+    let refused = ftmap(&[
+        "blend",
+        computed.to_str().unwrap(),
+        computed.to_str().unwrap(),
+        "--out",
+        dir.join("x.ftmap").to_str().unwrap(),
+    ]);
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("measured"));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -7,6 +7,7 @@ use crate::error::{MapError, Result};
 use crate::task::omega::Grid;
 use crate::wrench::WrenchModel;
 
+pub mod blend;
 pub mod format;
 
 /// Channels stored per cell, in order.
