@@ -71,10 +71,12 @@ pub enum HarnessError {
         path: PathBuf,
     },
     /// The FMU could not be loaded, instantiated or driven.
-    #[error("FMU {what}")]
+    #[error("FMU {what}{}", log.iter().map(|m| format!(": {m}")).collect::<String>())]
     Fmu {
         /// The call or variable concerned.
         what: String,
+        /// What the FMU logged (warnings and errors) on the way, oldest first.
+        log: Vec<String>,
         /// The importer's error.
         #[source]
         source: Box<dyn std::error::Error + Send + Sync>,

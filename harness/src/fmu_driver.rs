@@ -12,6 +12,7 @@ use fmi::traits::FmiImport;
 use model_description as md;
 
 use crate::error::{HarnessError, Result};
+use crate::fmu_log;
 use crate::vision::Features;
 
 /// Communication step of the FMU (s).
@@ -100,6 +101,7 @@ fn fmi_err(what: impl Into<String>) -> impl FnOnce(fmi::fmi2::Fmi2Error) -> Harn
     let what = what.into();
     move |e| HarnessError::Fmu {
         what,
+        log: fmu_log::take(),
         source: e.into(),
     }
 }
@@ -120,6 +122,7 @@ impl Fmu {
     /// [`HarnessError::FmuMissing`] (naming `cargo xtask fmu`) when there is no file;
     /// [`HarnessError::Fmu`] when it cannot be unpacked or lacks a variable.
     pub fn load(path: &Path) -> Result<Self> {
+        fmu_log::install();
         if !path.is_file() {
             return Err(HarnessError::FmuMissing {
                 path: path.to_owned(),
@@ -127,6 +130,7 @@ impl Fmu {
         }
         let import = fmi::import::from_path::<Fmi2Import>(path).map_err(|e| HarnessError::Fmu {
             what: format!("import {}", path.display()),
+            log: Vec::new(),
             source: e.into(),
         })?;
         let md = import.model_description();
@@ -135,6 +139,7 @@ impl Fmu {
                 .map(|v| v.value_reference)
                 .map_err(|e| HarnessError::Fmu {
                     what: format!("variable `{name}`"),
+                    log: Vec::new(),
                     source: e.into(),
                 })
         };
@@ -181,6 +186,7 @@ impl Fmu {
             .instantiate_cs("harness", false, false)
             .map_err(|e| HarnessError::Fmu {
                 what: "fmi2Instantiate".into(),
+                log: fmu_log::take(),
                 source: e.into(),
             })?;
         let r = &self.refs;
@@ -192,6 +198,7 @@ impl Fmu {
                 let text = file.to_string_lossy().into_owned();
                 let c = CString::new(text).map_err(|e| HarnessError::Fmu {
                     what: format!("parameter {name}"),
+                    log: Vec::new(),
                     source: e.into(),
                 })?;
                 inst.set_string(&[vr], &[c])

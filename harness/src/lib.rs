@@ -7,10 +7,10 @@
 //! - [`camera`], the calibrated camera and headless rendering; [`vision`], the camera
 //!   pipeline (image primitives, the gradient and Hough line detectors, features);
 //!   [`eye`], the camera as a trial's second sensor;
-//! - [`fmu_driver`], `FtFusion.fmu` through FMI calls; [`trial`], one trial (Algorithm 1 or
-//!   the spiral search); [`campaign`], campaigns set up and run; [`report`], `trials.csv`,
-//!   `measurements.csv` and `summary.json`; [`calibration`], whether the reported spread
-//!   tells the truth; [`plot`], the plots;
+//! - [`fmu_driver`], `FtFusion.fmu` through FMI calls, and [`fmu_log`], what it logged;
+//!   [`trial`], one trial (Algorithm 1 or the spiral search); [`campaign`], campaigns set
+//!   up and run; [`report`], `trials.csv`, `measurements.csv` and `summary.json`;
+//!   [`calibration`], whether the reported spread tells the truth; [`plot`], the plots;
 //! - [`scan`], measured maps; [`compare`], two maps' agreement and two campaigns side by
 //!   side; [`render`], one camera image with its edges, and the detectors' timing.
 
@@ -21,6 +21,7 @@ pub mod compare;
 pub mod error;
 pub mod eye;
 pub mod fmu_driver;
+pub mod fmu_log;
 pub mod plot;
 pub mod render;
 pub mod report;

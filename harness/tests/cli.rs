@@ -20,6 +20,32 @@ fn the_committed_scenes_are_current() {
 }
 
 #[test]
+fn an_fmu_refusal_says_what_the_fmu_logged() {
+    // A map file that is no FT-Map: the FMU refuses it at initialisation and logs why; the
+    // harness's error carries that message, not only the FMI status.
+    let dir = std::env::temp_dir().join(format!("harness-badmap-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let map = dir.join("garbage.ftmap");
+    std::fs::write(&map, b"this is not a map").unwrap();
+    let out = harness()
+        .args(["trials", "--task", "peg_in_hole", "--trials", "1", "--map"])
+        .arg(&map)
+        .arg("--out")
+        .arg(dir.join("run"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("fmi2ExitInitializationMode")
+            && err.contains("garbage.ftmap")
+            && err.contains("not an FT-Map file"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn a_missing_fmu_names_cargo_xtask_fmu() {
     let dir = std::env::temp_dir().join(format!("harness-nofmu-{}", std::process::id()));
     let out = harness()
