@@ -194,6 +194,7 @@ impl Params {
             } else {
                 Interpolation::Multilinear
             },
+            tail: checked(store, "tail")?,
         };
         let map = store.string(index_of("map")).to_owned();
         if map.trim().is_empty() {

@@ -264,7 +264,8 @@ pub const VARIABLES: &[Variable] = &[
         Start::Integer(20),
         "",
         [Some(1.0), Some(1000.0)],
-        "Filter iterations (weight, resample, jitter) per contact measurement",
+        "Filter iterations (weight, resample, jitter) per contact measurement; each weighs with \
+         the likelihood to the power 1 / iterations, so that a measurement counts once",
     ),
     param(
         "sigma_force",
@@ -279,7 +280,7 @@ pub const VARIABLES: &[Variable] = &[
         "sigma_torque",
         105,
         Real,
-        Start::Real(0.01),
+        Start::Real(0.005),
         "N.m",
         [Some(1e-9), Some(1e6)],
         "Standard deviation of a measured torque component",
@@ -297,7 +298,7 @@ pub const VARIABLES: &[Variable] = &[
         "jitter",
         107,
         Real,
-        Start::Real(0.2),
+        Start::Real(0.15),
         "",
         [Some(0.0), Some(10.0)],
         "Jitter after each iteration, standard deviation in grid intervals of each DOF",
@@ -330,6 +331,16 @@ pub const VARIABLES: &[Variable] = &[
         [Some(0.0), Some(1.0)],
         "Map lookup: 0 nearest cell, 1 multilinear",
     ),
+    param(
+        "tail",
+        111,
+        Real,
+        Start::Real(4.0),
+        "",
+        [Some(0.0), Some(1e6)],
+        "Degrees of freedom of the Student-t likelihood of the wrench residual (heavy tails: \
+         a contact the map does not explain cannot wipe out the right hypothesis); 0: Gaussian",
+    ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
         "vision",
@@ -345,7 +356,7 @@ pub const VARIABLES: &[Variable] = &[
         "sigma_vision",
         151,
         Real,
-        Start::Real(0.5),
+        Start::Real(0.15),
         "px",
         [Some(1e-6), Some(1e6)],
         "Standard deviation of a measured feature distance or edge column",

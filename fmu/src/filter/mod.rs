@@ -31,7 +31,8 @@ pub use vision::{Prepared, VisionMeasurement, VisionMethod, VisionSense};
 use crate::error::{FusionError, Result};
 
 /// Log-likelihood below which a particle's likelihood counts as underflowed: its linear
-/// weight would be below the smallest normal f32 (a residual of about 13 sigma).
+/// weight would be below the smallest normal f32 (with the Gaussian likelihood a residual of
+/// about 13 sigma; with the Student-t one only an absurd residual).
 const UNDERFLOW: f32 = -87.33655;
 /// Share of the particles re-spread uniformly when every likelihood underflows.
 const RESPREAD_SHARE: f64 = 0.5;
@@ -59,6 +60,8 @@ pub struct Config {
     pub threshold: f64,
     /// Map lookup.
     pub interpolation: Interpolation,
+    /// Degrees of freedom of the Student-t likelihood of the wrench residual; 0: Gaussian.
+    pub tail: f64,
 }
 
 impl Default for Config {
@@ -68,12 +71,13 @@ impl Default for Config {
             seed: 1,
             iterations: 20,
             sigma_force: 1.0,
-            sigma_torque: 0.01,
+            sigma_torque: 0.005,
             sigma_depth: 0.0005,
-            jitter: 0.2,
+            jitter: 0.15,
             confidence_radius: 1e-4,
             threshold: 0.9,
             interpolation: Interpolation::Multilinear,
+            tail: 4.0,
         }
     }
 }
@@ -308,6 +312,15 @@ impl Filter {
                 &ev.inv_var,
                 ll,
             );
+            if self.cfg.tail > 0.0 {
+                // Multivariate Student-t in the Gaussian's chi^2 = -2 ll over the d channels
+                // used: log (1 + chi^2 / nu) ^ (-(nu + d) / 2).
+                let nu = self.cfg.tail as f32;
+                let d = ev.inv_var.iter().filter(|v| **v > 0.0).count() as f32;
+                for l in ll.iter_mut() {
+                    *l = -0.5 * (nu + d) * (-2.0 * *l / nu).ln_1p();
+                }
+            }
         } else {
             ll.fill(0.0);
         }
@@ -339,8 +352,11 @@ impl Filter {
             self.log_likelihood(ev, &mut ll);
             self.lw.fill(0.0);
         }
+        // Each of the iterations weighs with the likelihood to the power 1 / iterations
+        // (annealing): a measurement counts once, however many iterations move the particles.
+        let temper = 1.0 / self.cfg.iterations as f32;
         for (w, l) in self.lw.iter_mut().zip(&ll) {
-            *w += l;
+            *w += l * temper;
         }
         self.scratch.ll = ll;
         normalise(&mut self.lw, &mut self.scratch.w)
