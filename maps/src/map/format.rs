@@ -76,8 +76,11 @@ pub fn save(map: &FtMap, path: &Path) -> Result<()> {
     write_bytes(&to_bytes(map), path)
 }
 
-/// Writes bytes to `path` through a temporary file beside it.
+/// Writes bytes to `path` through a temporary file beside it, renamed into place: a reader
+/// never sees a partial map, and writers of the same path (threads, or processes filling a
+/// map cache) each use their own temporary file, the last rename winning.
 pub fn write_bytes(bytes: &[u8], path: &Path) -> Result<()> {
+    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let io = |source| MapError::Io {
         path: path.to_owned(),
         source,
@@ -85,9 +88,13 @@ pub fn write_bytes(bytes: &[u8], path: &Path) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io)?;
     }
-    let tmp = path.with_extension("ftmap.partial");
+    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = path.with_extension(format!("ftmap.{}-{n}.partial", std::process::id()));
     std::fs::write(&tmp, bytes).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(io)
+    std::fs::rename(&tmp, path).map_err(|e| {
+        std::fs::remove_file(&tmp).ok();
+        io(e)
+    })
 }
 
 /// Reads a complete map file, refusing foreign, truncated, corrupted, wrong-version and
@@ -270,5 +277,25 @@ mod tests {
         bytes[at + 11] = b'o';
         let e = roundtrip_err(&bytes);
         assert!(e.to_string().contains("kind is `ftmop`"), "{e}");
+    }
+
+    #[test]
+    fn concurrent_writers_of_one_path_all_succeed_and_leave_a_whole_map() {
+        let dir = std::env::temp_dir().join(format!("ftmap-race-{}", std::process::id()));
+        let path = dir.join("m.ftmap");
+        let map = sample_map();
+        std::thread::scope(|s| {
+            for _ in 0..8 {
+                s.spawn(|| {
+                    for _ in 0..20 {
+                        save(&map, &path).expect("every write succeeds");
+                    }
+                });
+            }
+        });
+        assert_eq!(load(&path).expect("a whole map"), map);
+        let left: Vec<_> = std::fs::read_dir(&dir).expect("dir").flatten().collect();
+        assert_eq!(left.len(), 1, "temporary files left: {left:?}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
