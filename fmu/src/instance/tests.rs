@@ -22,8 +22,14 @@ fn the_pose_outputs_are_named_after_the_maps_dofs() {
     }
 }
 
-/// A resources folder holding the synthetic map as `peg.ftmap` and a corrupt copy.
+/// A resources folder holding the synthetic map as `peg.ftmap` and a corrupt copy, written
+/// once per test process (tests run in parallel: none rewrites a file another reads).
 fn resources() -> PathBuf {
+    static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(write_resources).clone()
+}
+
+fn write_resources() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("ftfusion-instance-{}", std::process::id()));
     let map = peg_map(5e-3, 2.5e-4, None).expect("map");
     ftmap::map::format::save(&map, &dir.join("peg.ftmap")).expect("write map");
