@@ -112,5 +112,13 @@ pub enum MapError {
     },
 }
 
+impl MapError {
+    /// The conversion of an I/O error on `path` into [`MapError::Io`], for `map_err`.
+    pub fn io(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> Self {
+        let path = path.to_owned();
+        move |source| Self::Io { path, source }
+    }
+}
+
 /// Result with [`MapError`].
 pub type Result<T, E = MapError> = std::result::Result<T, E>;

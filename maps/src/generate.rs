@@ -121,10 +121,7 @@ pub fn cached(task: &Task, dir: &Path) -> Result<(PathBuf, bool)> {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
     for f in [&task.path, &task.part_a.mesh, &task.part_b.mesh] {
-        h.update(std::fs::read(f).map_err(|source| MapError::Io {
-            path: f.clone(),
-            source,
-        })?);
+        h.update(std::fs::read(f).map_err(MapError::io(f))?);
     }
     h.update(env!("CARGO_PKG_VERSION"));
     let hash: String = h
@@ -137,10 +134,7 @@ pub fn cached(task: &Task, dir: &Path) -> Result<(PathBuf, bool)> {
     if path.is_file() && crate::map::format::load(&path).is_ok() {
         return Ok((path, false));
     }
-    std::fs::create_dir_all(dir).map_err(|source| MapError::Io {
-        path: dir.to_owned(),
-        source,
-    })?;
+    std::fs::create_dir_all(dir).map_err(MapError::io(dir))?;
     let map = generate(
         task,
         &crate::depth::cpu::CpuBackend,

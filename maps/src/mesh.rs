@@ -28,10 +28,7 @@ impl Mesh {
             path: path.to_owned(),
             reason,
         };
-        let bytes = std::fs::read(path).map_err(|source| MapError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let bytes = std::fs::read(path).map_err(MapError::io(path))?;
         let stl = stl_io::read_stl(&mut std::io::Cursor::new(&bytes))
             .map_err(|e| err(format!("not a readable STL file: {e}")))?;
         if stl.faces.is_empty() {

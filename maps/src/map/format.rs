@@ -81,29 +81,22 @@ pub fn save(map: &FtMap, path: &Path) -> Result<()> {
 /// map cache) each use their own temporary file, the last rename winning.
 pub fn write_bytes(bytes: &[u8], path: &Path) -> Result<()> {
     static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let io = |source| MapError::Io {
-        path: path.to_owned(),
-        source,
-    };
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(io)?;
+        std::fs::create_dir_all(dir).map_err(MapError::io(path))?;
     }
     let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let tmp = path.with_extension(format!("ftmap.{}-{n}.partial", std::process::id()));
-    std::fs::write(&tmp, bytes).map_err(io)?;
+    std::fs::write(&tmp, bytes).map_err(MapError::io(path))?;
     std::fs::rename(&tmp, path).map_err(|e| {
         std::fs::remove_file(&tmp).ok();
-        io(e)
+        MapError::io(path)(e)
     })
 }
 
 /// Reads a complete map file, refusing foreign, truncated, corrupted, wrong-version and
 /// shard files.
 pub fn load(path: &Path) -> Result<FtMap> {
-    let bytes = std::fs::read(path).map_err(|source| MapError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let bytes = std::fs::read(path).map_err(MapError::io(path))?;
     from_bytes(&bytes, path)
 }
 
@@ -122,10 +115,7 @@ pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<FtMap> {
 
 /// Reads a map or shard file: the map and, for a shard, `[i, n]`.
 pub fn load_any(path: &Path) -> Result<(FtMap, Option<[usize; 2]>)> {
-    let bytes = std::fs::read(path).map_err(|source| MapError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let bytes = std::fs::read(path).map_err(MapError::io(path))?;
     decode(&bytes, path)
 }
 

@@ -216,10 +216,7 @@ impl Task {
             path: path.to_owned(),
             reason,
         };
-        let text = std::fs::read_to_string(path).map_err(|source| MapError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = std::fs::read_to_string(path).map_err(MapError::io(path))?;
         let file: TaskFile = toml::from_str(&text).map_err(|e| err(e.to_string()))?;
         // The optional tables are read on their own, so that an error names its table.
         fn table<T: serde::de::DeserializeOwned>(
@@ -350,12 +347,7 @@ impl Task {
             .into_iter()
             .map(|m| {
                 let path = self.dir().join(m.file);
-                std::fs::write(&path, cad::stl_bytes(&m.triangles)).map_err(|source| {
-                    MapError::Io {
-                        path: path.clone(),
-                        source,
-                    }
-                })?;
+                std::fs::write(&path, cad::stl_bytes(&m.triangles)).map_err(MapError::io(&path))?;
                 Ok(path)
             })
             .collect()

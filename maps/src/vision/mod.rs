@@ -237,10 +237,7 @@ impl VisionModel {
             path: path.to_owned(),
             reason,
         };
-        let text = std::fs::read_to_string(path).map_err(|source| MapError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = std::fs::read_to_string(path).map_err(MapError::io(path))?;
         let file: VisionFile =
             serde_json::from_str(&text).map_err(|e| bad(format!("not a vision model: {e}")))?;
         if file.kind != VISION_KIND {
@@ -278,10 +275,7 @@ impl VisionModel {
             path: path.to_owned(),
             reason: e.to_string(),
         })?;
-        std::fs::write(path, text).map_err(|source| MapError::Io {
-            path: path.to_owned(),
-            source,
-        })
+        std::fs::write(path, text).map_err(MapError::io(path))
     }
 }
 
