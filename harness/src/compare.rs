@@ -36,11 +36,11 @@ pub struct ChannelAgreement {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Region {
     /// The part goes in: the contact depth is below half the deepest of the compared cells.
-    Centre,
+    Centre = 0,
     /// The part rests on an edge: torque magnitude above [`TORQUE_FLOOR`].
-    Rim,
+    Rim = 1,
     /// The part rests flat on a surface: no torque.
-    Outside,
+    Outside = 2,
 }
 
 impl Region {
@@ -140,7 +140,7 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
     let (mut angle_sum, mut angle_max, mut angles) = (0.0, 0.0f64, 0usize);
     for (at, va, vb) in &compared {
         let region = Region::of(&reference(va, vb), deepest);
-        let r = Region::ALL.iter().position(|&x| x == region).unwrap_or(0);
+        let r = region as usize;
         for k in 0..NCH {
             let (x, y) = (va[k], vb[k]);
             if x.is_finite() && y.is_finite() {

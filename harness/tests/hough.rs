@@ -9,7 +9,7 @@ use std::sync::Mutex;
 
 use harness::vision::features::{Detector, detect_edges_in};
 use harness::vision::hough::{HoughParams, detect_line_hough};
-use harness::vision::image::{Gradient, Line, add_noise};
+use harness::vision::image::{Gradient, Line, LineParams, add_noise};
 
 /// One offscreen GL context at a time.
 static GL: Mutex<()> = Mutex::new(());
@@ -62,7 +62,10 @@ fn hough_edges_match_the_projected_geometry_and_detect_line() {
             for r in &results {
                 let ends = [r.expected.p0, r.expected.p1];
                 let params = HoughParams {
-                    band: r.band,
+                    line: LineParams {
+                        band: r.band,
+                        ..LineParams::default()
+                    },
                     ..HoughParams::default()
                 };
                 let l = detect_line_hough(&grad, ends, &params).unwrap_or_else(|e| {

@@ -4,9 +4,9 @@
 
 use ftmap::vision::{Camera, VisionModel};
 
-use super::gradient::{LineParams, detect_line};
+use super::gradient::detect_line;
 use super::hough::{HoughParams, detect_line_hough};
-use super::image::{Gradient, Line, VisionError};
+use super::image::{Gradient, Line, LineParams, VisionError};
 use crate::error::{HarnessError, Result};
 
 /// A named expected edge: its 3-D endpoints.
@@ -163,7 +163,10 @@ impl Detector {
                 grad,
                 ends,
                 &HoughParams {
-                    band,
+                    line: LineParams {
+                        band,
+                        ..LineParams::default()
+                    },
                     ..HoughParams::default()
                 },
             ),

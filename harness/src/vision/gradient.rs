@@ -11,34 +11,7 @@
 //! the expected line is too weak, or too few points agree on a line, the result is
 //! [`VisionError::FeatureNotFound`], never a guess.
 
-use super::image::{EdgePoints, FitParams, Gradient, Line, VisionError};
-
-/// Tuning of [`detect_line`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LineParams {
-    /// Fraction of the expected length by which each endpoint moves toward the other.
-    pub shrink: f64,
-    /// Half width of the search band across the expected line (px).
-    pub band: f64,
-    /// Least gradient (grey levels per px) of an edge point.
-    pub min_gradient: f32,
-    /// Extension stops where the gradient falls below this fraction of the median edge gradient.
-    pub stop_ratio: f32,
-    /// Least fraction of the searched rows/columns that must hold agreeing edge points.
-    pub min_support: f64,
-}
-
-impl Default for LineParams {
-    fn default() -> Self {
-        Self {
-            shrink: 0.2,
-            band: 12.0,
-            min_gradient: 8.0,
-            stop_ratio: 0.35,
-            min_support: 0.5,
-        }
-    }
-}
+use super::image::{EdgePoints, Gradient, Line, LineParams, VisionError};
 
 /// Detects the line edge expected between `expected[0]` and `expected[1]` (pixel coordinates).
 ///
@@ -103,14 +76,7 @@ pub fn detect_line(
         gradients,
         searched,
     }
-    .fit(
-        grad,
-        FitParams {
-            min_support: p.min_support,
-            stop_ratio: p.stop_ratio,
-            min_gradient: p.min_gradient,
-        },
-    )
+    .fit(grad, p)
 }
 
 #[cfg(test)]

@@ -14,40 +14,29 @@
 //! along the line while the gradient holds, and fitted again. Too weak a peak, or too few
 //! supporting points, is [`VisionError::FeatureNotFound`], never a guess.
 
-use super::image::{EdgePoints, FitParams, Gradient, Line, NEAR, VisionError};
+use super::image::{EdgePoints, Gradient, Line, LineParams, NEAR, VisionError};
 
 /// Tuning of [`detect_line_hough`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HoughParams {
-    /// Half width of the search band across the expected line (px): the rho range.
-    pub band: f64,
+    /// The search near the expected line (band: the rho range; shrink, least gradient,
+    /// extension and support as for the gradient detector).
+    pub line: LineParams,
     /// Largest deviation of the line's direction from the expected one (degrees): the theta range.
     pub max_angle: f64,
     /// Hough resolution (px): the largest line displacement per rho step, and per theta step within the expected length.
     pub resolution: f64,
-    /// Least gradient (grey levels per px) of a voting pixel and of an edge point.
-    pub min_gradient: f32,
     /// Least mean gradient (grey levels per px) along the accumulator's peak line.
     pub min_peak: f32,
-    /// Fraction of the expected length by which each endpoint moves toward the other.
-    pub shrink: f64,
-    /// Extension stops where the gradient falls below this fraction of the median edge gradient.
-    pub stop_ratio: f32,
-    /// Least fraction of the searched rows/columns that must hold edge points on the line.
-    pub min_support: f64,
 }
 
 impl Default for HoughParams {
     fn default() -> Self {
         Self {
-            band: 12.0,
+            line: LineParams::default(),
             max_angle: 3.0,
             resolution: 0.5,
-            min_gradient: 8.0,
             min_peak: 4.0,
-            shrink: 0.2,
-            stop_ratio: 0.35,
-            min_support: 0.5,
         }
     }
 }
@@ -73,16 +62,16 @@ pub fn detect_line_hough(
         ));
     }
     // Below 45 degrees the peak line stays within 90 degrees of the expected major axis.
-    if !(p.band > 0.0
+    if !(p.line.band > 0.0
         && p.max_angle >= 0.0
         && p.max_angle < 45.0
         && p.resolution >= 0.05
-        && p.shrink >= 0.0
-        && p.shrink < 0.5)
+        && p.line.shrink >= 0.0
+        && p.line.shrink < 0.5)
     {
         return not_found(format!(
             "no Hough space for band {}, max angle {}, resolution {}, shrink {}",
-            p.band, p.max_angle, p.resolution, p.shrink
+            p.line.band, p.max_angle, p.resolution, p.line.shrink
         ));
     }
     let (w, h) = (grad.width, grad.height);
@@ -94,7 +83,7 @@ pub fn detect_line_hough(
     // in it: they bound the accumulator's size.
     let diag = (w as f64).hypot(h as f64);
     let reach = diag + (m[0] - 0.5 * w as f64).hypot(m[1] - 0.5 * h as f64);
-    let band = p.band.min(reach);
+    let band = p.line.band.min(reach);
     // Hough space: theta steps moving the expected segment's ends by at most `resolution`.
     let half_len = 0.5 * len;
     let max_angle = p.max_angle.to_radians();
@@ -114,12 +103,12 @@ pub fn detect_line_hough(
         })
         .collect();
     // Voting region: within the band (widened by the largest rotation) between the shrunk ends.
-    let half_vote = half_len * (1.0 - 2.0 * p.shrink);
+    let half_vote = half_len * (1.0 - 2.0 * p.line.shrink);
     if half_vote < 1.0 {
         return not_found(format!(
             "voting span of {:.1} px after shrinking by {}",
             2.0 * half_vote,
-            p.shrink
+            p.line.shrink
         ));
     }
     let across = band + half_vote * max_angle.sin() + 1.0;
@@ -163,7 +152,7 @@ pub fn detect_line_hough(
         );
         for x in x0 as i64..=x1 as i64 {
             let g = grad.along(x, y, nf);
-            if g >= p.min_gradient {
+            if g >= p.line.min_gradient {
                 voters.push([x as f64 - m[0], ry, f64::from(g)]);
             }
         }
@@ -223,8 +212,8 @@ pub fn detect_line_hough(
     }
     let span = a1[0] - a0[0];
     let (s0, s1) = (
-        (a0[0] + p.shrink * span).ceil(),
-        (a1[0] - p.shrink * span).floor(),
+        (a0[0] + p.line.shrink * span).ceil(),
+        (a1[0] - p.line.shrink * span).floor(),
     );
     let searched = (s1 - s0 + 1.0).max(1.0);
     let smax = if steep { h } else { w };
@@ -234,18 +223,18 @@ pub fn detect_line_hough(
     for s in s0.max(1.0) as i64..=s1.min(smax as f64 - 2.0) as i64 {
         let t = a * s as f64 + b;
         if let Some((t, g)) = grad.peak(steep, nf, s, t - NEAR, t + NEAR)
-            && g >= p.min_gradient
+            && g >= p.line.min_gradient
         {
             pts.push([s as f64, t]);
             grads.push(g);
         }
     }
     let axis = if steep { "rows" } else { "columns" };
-    if (pts.len() as f64) < p.min_support * searched {
+    if (pts.len() as f64) < p.line.min_support * searched {
         return not_found(format!(
             "{} of {searched} {axis} have a gradient above {} within {NEAR} px of the Hough peak line",
             pts.len(),
-            p.min_gradient
+            p.line.min_gradient
         ));
     }
     // Fit, extend along the fitted line while the gradient holds, fit again.
@@ -256,14 +245,7 @@ pub fn detect_line_hough(
         gradients: grads,
         searched,
     }
-    .fit(
-        grad,
-        FitParams {
-            min_support: p.min_support,
-            stop_ratio: p.stop_ratio,
-            min_gradient: p.min_gradient,
-        },
-    )
+    .fit(grad, &p.line)
 }
 
 #[cfg(test)]
@@ -351,7 +333,10 @@ mod tests {
             &grad,
             [[300.0, 100.0], [310.0, 380.0]],
             &HoughParams {
-                band: 40.0,
+                line: LineParams {
+                    band: 40.0,
+                    ..LineParams::default()
+                },
                 ..HoughParams::default()
             },
         );
@@ -403,14 +388,20 @@ mod tests {
             (
                 [[10.0, 10.0], [200.0, 11.0]],
                 HoughParams {
-                    band: 0.0,
+                    line: LineParams {
+                        band: 0.0,
+                        ..LineParams::default()
+                    },
                     ..HoughParams::default()
                 },
             ),
             (
                 [[10.0, 10.0], [200.0, 11.0]],
                 HoughParams {
-                    shrink: 0.5,
+                    line: LineParams {
+                        shrink: 0.5,
+                        ..LineParams::default()
+                    },
                     ..HoughParams::default()
                 },
             ),
@@ -436,7 +427,10 @@ mod tests {
             (
                 [[-1e12, 40.0], [1e12, 45.0]],
                 HoughParams {
-                    band: 1e9,
+                    line: LineParams {
+                        band: 1e9,
+                        ..LineParams::default()
+                    },
                     ..HoughParams::default()
                 },
             ),

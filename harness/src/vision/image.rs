@@ -210,15 +210,32 @@ pub(crate) struct EdgePoints {
     pub searched: f64,
 }
 
-/// Tuning shared by the detectors' final fit.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct FitParams {
-    /// Least fraction of the searched rows/columns that must hold agreeing edge points.
-    pub min_support: f64,
+/// The search for a line edge near its expected place, shared by both detectors (the
+/// gradient detector and the bounded Hough transform).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineParams {
+    /// Fraction of the expected length by which each endpoint moves toward the other.
+    pub shrink: f64,
+    /// Half width of the search band across the expected line (px): for Hough, the rho range.
+    pub band: f64,
+    /// Least gradient (grey levels per px) of an edge point (and of a Hough vote).
+    pub min_gradient: f32,
     /// Extension stops where the gradient falls below this fraction of the median edge gradient.
     pub stop_ratio: f32,
-    /// Least gradient (grey levels per px) of an edge point.
-    pub min_gradient: f32,
+    /// Least fraction of the searched rows/columns that must hold agreeing edge points.
+    pub min_support: f64,
+}
+
+impl Default for LineParams {
+    fn default() -> Self {
+        Self {
+            shrink: 0.2,
+            band: 12.0,
+            min_gradient: 8.0,
+            stop_ratio: 0.35,
+            min_support: 0.5,
+        }
+    }
 }
 
 impl EdgePoints {
@@ -229,7 +246,7 @@ impl EdgePoints {
     /// # Errors
     /// [`VisionError::FeatureNotFound`] when the points are degenerate or too few lie on one
     /// line.
-    pub fn fit(mut self, grad: &Gradient, p: FitParams) -> Result<Line, VisionError> {
+    pub fn fit(mut self, grad: &Gradient, p: &LineParams) -> Result<Line, VisionError> {
         let not_found = |why: String| Err(VisionError::FeatureNotFound(why));
         let pts = &mut self.points;
         let Some((a, b)) = robust_fit(pts, NEAR) else {
