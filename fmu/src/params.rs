@@ -195,6 +195,7 @@ impl Params {
                 Interpolation::Multilinear
             },
             tail: checked(store, "tail")?,
+            clearance: checked(store, "clearance")?,
         };
         let map = store.string(index_of("map")).to_owned();
         if map.trim().is_empty() {

@@ -12,7 +12,6 @@ use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
 use ftmap::Task;
-use ftmap::task::cad::Geometry;
 
 use crate::calibration;
 use crate::error::{HarnessError, Result, create_dir};
@@ -358,32 +357,6 @@ fn resolve_map(
     }
 }
 
-/// Radial clearance of a task's parts (m): the spiral's pitch stays below twice it.
-fn clearance(task: &Task) -> Result<f64> {
-    Ok(match *task.geometry()? {
-        Geometry::RoundPeg {
-            peg_radius,
-            hole_radius,
-            ..
-        } => hole_radius - peg_radius,
-        Geometry::OctagonPeg {
-            peg_across_flats,
-            hole_across_flats,
-            ..
-        } => (hole_across_flats - peg_across_flats) / 2.0,
-        Geometry::GearOnShaft {
-            bore_radius,
-            shaft_radius,
-            ..
-        } => bore_radius - shaft_radius,
-        Geometry::BearingHousing {
-            bore_radius,
-            seat_radius,
-            ..
-        } => bore_radius - seat_radius,
-    })
-}
-
 /// The trial limits and FMU settings of a campaign, with the FT-Map file `map`.
 fn trial_config(
     options: &CampaignOptions,
@@ -391,7 +364,8 @@ fn trial_config(
     map: Option<PathBuf>,
 ) -> Result<TrialConfig> {
     let size = task.omega.size_trans;
-    let spiral_step = 1.6 * clearance(task)?;
+    // The spiral's pitch stays below twice the radial clearance.
+    let spiral_step = 1.6 * task.geometry()?.clearance();
     let spiral_radius = size * 2f64.sqrt();
     let spiral_points = spiral(spiral_step, spiral_radius).len();
     let max_contacts = options.max_contacts.unwrap_or(match options.strategy {

@@ -220,10 +220,12 @@ pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
     ])
     .map_err(io)?;
     for (i, r) in results.iter().enumerate() {
+        // True offsets exactly (shortest round-trip text), so that a script repeats a trial
+        // bit for bit: near the fit's boundary a nanometre can decide an insertion.
         w.write_record([
             i.to_string(),
-            format!("{:.9}", r.offset[0]),
-            format!("{:.9}", r.offset[1]),
+            r.offset[0].to_string(),
+            r.offset[1].to_string(),
             r.contacts.to_string(),
             r.measurements().to_string(),
             r.success.to_string(),
@@ -272,8 +274,8 @@ pub fn write_measurements_csv(path: &Path, samples: &[Sample]) -> Result<()> {
             s.trial.to_string(),
             s.measurement.to_string(),
             s.image.to_string(),
-            m(s.truth[0]),
-            m(s.truth[1]),
+            s.truth[0].to_string(),
+            s.truth[1].to_string(),
             m(e.object[0]),
             m(e.object[1]),
             format!("{:.12}", e.std[0]),

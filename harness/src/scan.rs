@@ -140,5 +140,6 @@ fn meta(task: &Task) -> Result<MapMeta> {
             env!("CARGO_PKG_VERSION"),
             mujoco_rs::mujoco_version()
         ),
+        clearance: Some(task.geometry()?.clearance()),
     })
 }

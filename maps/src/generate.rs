@@ -110,8 +110,13 @@ pub fn generate(
     generate_with(task, &mesh_a, &mesh_b, backend, opts, progress)
 }
 
+/// Revision of what a computed map holds, part of the cache key: raise it when a change
+/// to the generator changes the maps (2: the clearance in the metadata).
+const MAP_REVISION: u32 = 2;
+
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
-/// it is kept under the hash of the task file, its meshes and this crate's version;
+/// it is kept under the hash of the task file, its meshes, this crate's version and
+/// [`MAP_REVISION`];
 /// computed and stored when missing or unreadable. Returns the file and whether it was
 /// computed now.
 ///
@@ -124,6 +129,7 @@ pub fn cached(task: &Task, dir: &Path) -> Result<(PathBuf, bool)> {
         h.update(std::fs::read(f).map_err(MapError::io(f))?);
     }
     h.update(env!("CARGO_PKG_VERSION"));
+    h.update(MAP_REVISION.to_le_bytes());
     let hash: String = h
         .finalize()
         .iter()
@@ -183,6 +189,7 @@ pub fn generate_with(
         })
         .collect(),
         generator: format!("ftmap {} ({})", env!("CARGO_PKG_VERSION"), backend.name()),
+        clearance: task.geometry.as_ref().map(|g| g.clearance()),
     };
     let mut map = FtMap::zeros(grid.clone(), meta);
     if let Some([i, n]) = opts.shard {

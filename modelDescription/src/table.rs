@@ -341,6 +341,18 @@ pub const VARIABLES: &[Variable] = &[
         "Degrees of freedom of the Student-t likelihood of the wrench residual (heavy tails: \
          a contact the map does not explain cannot wipe out the right hypothesis); 0: Gaussian",
     ),
+    param(
+        "clearance",
+        112,
+        Real,
+        Start::Real(0.0),
+        "m",
+        [Some(-1.0), Some(1.0)],
+        "Radial clearance of the fit: a contact that did not go in rules out part B within it \
+         of the TCP (maps over object.x, object.y only; it replaces the depth channel there); \
+         0: the map's (ftmap writes it from the task's geometry), none if the map has none; \
+         negative: off",
+    ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
         "vision",

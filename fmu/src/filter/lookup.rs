@@ -1,6 +1,14 @@
 //! The FT-Map as the filter reads it: cells padded to eight `f32` channels, axes in grid
 //! units, and the log-likelihood of Eq. 3 for a whole particle set in one pass (nearest
 //! cell or multilinear, specialised per number of axes).
+//!
+//! A wrench is measured where part A rests on part B, never where it went in: the wrench of
+//! an inserted cell (the depth channel at the inserted end of its range) says nothing about
+//! a contact. Its wrench channels are masked (the eighth lane holds 1 for a contact cell, 0
+//! for an inserted one) and an interpolation renormalises the wrench over the contact
+//! corners: a particle 0.06 mm off the hole's centre on a 0.1 mm grid reads the rim's
+//! torque, not a blend with the inserted centre's zero torque. The depth channel is not
+//! masked.
 
 use std::path::Path;
 
@@ -8,8 +16,10 @@ use ftmap::{Axis, Dof, FtMap, NCH, Pose};
 
 use crate::error::{FusionError, Result};
 
-/// Channels per padded cell: fx fy fz tx ty tz depth, 0.
+/// Channels per padded cell: fx fy fz tx ty tz depth, contact (1) or inserted (0).
 pub const LANES: usize = 8;
+/// The lane that flags a contact cell.
+const CONTACT: usize = LANES - 1;
 
 /// One axis of the map in the filter's terms.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,7 +61,10 @@ pub struct Lookup {
     axes: Vec<MapAxis>,
     cells: Vec<[f32; LANES]>,
     has_depth: bool,
+    /// Lowest and highest value of the depth channel.
+    depth_range: [f32; 2],
     approach: [f64; 3],
+    clearance: Option<f64>,
 }
 
 /// Which lookup the likelihood uses.
@@ -92,6 +105,7 @@ impl Lookup {
             .collect();
         let mut cells = Vec::with_capacity(grid.cells());
         let mut depth_seen = false;
+        let mut depth_range = [f32::INFINITY, f32::NEG_INFINITY];
         for i in 0..grid.cells() {
             let c = map.cell(i);
             if let Some(ch) = c.iter().position(|v| !v.is_finite()) {
@@ -101,16 +115,31 @@ impl Lookup {
                 )));
             }
             depth_seen |= c[NCH - 1] != 0.0;
+            depth_range = [
+                depth_range[0].min(c[NCH - 1]),
+                depth_range[1].max(c[NCH - 1]),
+            ];
             let mut padded = [0.0; LANES];
             padded[..NCH].copy_from_slice(c);
+            padded[CONTACT] = 1.0;
             cells.push(padded);
         }
-        Ok(Self {
+        let mut lookup = Self {
             axes,
             cells,
             has_depth: depth_seen,
+            depth_range,
             approach: map.meta().approach,
-        })
+            clearance: map.meta().clearance,
+        };
+        for i in 0..lookup.cells.len() {
+            if lookup.inserted(f64::from(lookup.cells[i][NCH - 1])) {
+                let cell = &mut lookup.cells[i];
+                cell[..NCH - 1].fill(0.0);
+                cell[CONTACT] = 0.0;
+            }
+        }
+        Ok(lookup)
     }
 
     /// The axes in map order.
@@ -123,9 +152,20 @@ impl Lookup {
         self.axes.len()
     }
 
+    /// The fit's radial clearance, when the map's metadata has it (m).
+    pub fn clearance(&self) -> Option<f64> {
+        self.clearance
+    }
+
     /// True when the depth channel holds values (not all zero).
     pub fn has_depth(&self) -> bool {
         self.has_depth
+    }
+
+    /// Whether a contact at `height` (m) went in: below the middle of the depth channel's
+    /// range (between resting on part B and inserted); never on a map without depth.
+    pub fn inserted(&self, height: f64) -> bool {
+        self.has_depth && height < 0.5 * f64::from(self.depth_range[0] + self.depth_range[1])
     }
 
     /// Height of a TCP position against the approach vector (the contact height at a contact).
@@ -170,6 +210,7 @@ impl Lookup {
                 }
             }
         }
+        over_contacts(&mut out);
         out
     }
 
@@ -275,6 +316,7 @@ impl Lookup {
                     acc[l] += w * cell[l];
                 }
             }
+            over_contacts(&mut acc);
             *o = residual(&acc, meas, inv_var);
         }
     }
@@ -303,7 +345,20 @@ impl Lookup {
     }
 }
 
-/// -1/2 sum_l inv_var[l] (meas[l] - pred[l])^2.
+/// Renormalises an interpolated wrench over the contact corners (their weight is the
+/// contact lane); with none, the masked zeros stay.
+#[inline(always)]
+fn over_contacts(acc: &mut [f32; LANES]) {
+    let w = acc[CONTACT];
+    if w > 0.0 && w < 1.0 {
+        let s = 1.0 / w;
+        for v in &mut acc[..NCH - 1] {
+            *v *= s;
+        }
+    }
+}
+
+/// -1/2 sum_l inv_var[l] (meas[l] - pred[l])^2 (the contact lane's inv_var is 0).
 #[inline(always)]
 fn residual(pred: &[f32; LANES], meas: &[f32; LANES], inv_var: &[f32; LANES]) -> f32 {
     let mut s = 0.0;

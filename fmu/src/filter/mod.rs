@@ -10,6 +10,7 @@
 
 mod estimate;
 mod lookup;
+mod negative;
 mod noise;
 mod resample;
 mod state;
@@ -25,6 +26,7 @@ use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
 pub use estimate::Estimate;
 pub use lookup::{Interpolation, LANES, Lookup, MapAxis};
+pub use negative::NegativeContact;
 pub use state::{Reader, Writer};
 pub use vision::{Prepared, VisionMeasurement, VisionMethod, VisionSense};
 
@@ -34,6 +36,9 @@ use crate::error::{FusionError, Result};
 /// weight would be below the smallest normal f32 (with the Gaussian likelihood a residual of
 /// about 13 sigma; with the Student-t one only an absurd residual).
 const UNDERFLOW: f32 = -87.33655;
+/// The jitter of one measurement's iterations together moves a particle by at most this
+/// share of the particles' spread (standard deviations).
+const JITTER_SPREAD: f64 = 0.5;
 /// Share of the particles re-spread uniformly when every likelihood underflows.
 const RESPREAD_SHARE: f64 = 0.5;
 
@@ -62,6 +67,9 @@ pub struct Config {
     pub interpolation: Interpolation,
     /// Degrees of freedom of the Student-t likelihood of the wrench residual; 0: Gaussian.
     pub tail: f64,
+    /// Radial clearance of the negative contact (m): 0, the map's; negative, no negative
+    /// contact (module `negative`).
+    pub clearance: f64,
 }
 
 impl Default for Config {
@@ -78,6 +86,7 @@ impl Default for Config {
             threshold: 0.9,
             interpolation: Interpolation::Multilinear,
             tail: 4.0,
+            clearance: 0.0,
         }
     }
 }
@@ -112,6 +121,7 @@ pub struct Filter {
     lookup: Arc<Lookup>,
     cfg: Config,
     vision: Option<Arc<VisionSense>>,
+    negative: Option<NegativeContact>,
     /// Grid coordinates, axis-major: `pos[k * n + i]`.
     pos: Vec<f32>,
     /// Normalised log weights (sum of exp = 1).
@@ -141,10 +151,17 @@ impl Filter {
     pub fn with_lookup(lookup: Arc<Lookup>, cfg: Config) -> Self {
         let n = cfg.particles;
         let d = lookup.ndim();
+        let clearance = match cfg.clearance {
+            c if c > 0.0 => Some(c),
+            0.0 => lookup.clearance(),
+            _ => None,
+        };
+        let negative = clearance.and_then(|c| NegativeContact::new(lookup.axes(), c));
         let mut f = Self {
             lookup,
             cfg,
             vision: None,
+            negative,
             pos: vec![0.0; n * d],
             lw: vec![-(n as f32).ln(); n],
             rng: Xoshiro256PlusPlus::seed_from_u64(cfg.seed),
@@ -173,6 +190,11 @@ impl Filter {
     /// The vision model, when images are weighed.
     pub fn vision(&self) -> Option<&VisionSense> {
         self.vision.as_deref()
+    }
+
+    /// The negative contact, where it applies to this map.
+    pub fn negative_contact(&self) -> Option<&NegativeContact> {
+        self.negative.as_ref()
     }
 
     /// The prepared map.
@@ -260,12 +282,18 @@ impl Filter {
             return Ok(report);
         }
         let c = &self.cfg;
-        let use_depth = c.sigma_depth > 0.0 && self.lookup.has_depth();
+        let height = self.lookup.height(&m.tcp);
+        // A contact that did not go in is a negative contact where the map allows one; it
+        // replaces the depth channel then.
+        let negative = self
+            .negative
+            .filter(|_| !m.vision_only && !self.lookup.inserted(height));
+        let use_depth = c.sigma_depth > 0.0 && self.lookup.has_depth() && negative.is_none();
         let mut meas = [0.0f32; LANES];
         for (dst, &src) in meas.iter_mut().zip(&m.wrench) {
             *dst = src as f32;
         }
-        meas[6] = self.lookup.height(&m.tcp) as f32;
+        meas[6] = height as f32;
         let (vf, vt) = (
             (1.0 / (c.sigma_force * c.sigma_force)) as f32,
             (1.0 / (c.sigma_torque * c.sigma_torque)) as f32,
@@ -277,6 +305,7 @@ impl Filter {
         };
         let inv_var = [vf, vf, vf, vt, vt, vt, vd, 0.0];
         let evidence = Evidence {
+            negative: negative.map(|n| (n, [m.tcp[0], m.tcp[1]])),
             shift: self.lookup.tcp_shift(&m.tcp),
             meas,
             inv_var,
@@ -320,6 +349,9 @@ impl Filter {
                 for l in ll.iter_mut() {
                     *l = -0.5 * (nu + d) * (-2.0 * *l / nu).ln_1p();
                 }
+            }
+            if let Some((negative, tcp)) = &ev.negative {
+                negative.add_log_likelihood(&self.pos, self.cfg.particles, *tcp, ll);
             }
         } else {
             ll.fill(0.0);
@@ -381,25 +413,34 @@ impl Filter {
         self.lw.fill(-(n as f32).ln());
     }
 
-    /// Gaussian jitter of `jitter` grid intervals on every axis, clamped into Omega.
+    /// Gaussian jitter on every axis, clamped into Omega: `jitter` grid intervals, or less
+    /// once the particles' spread is small, so that the jitter of a measurement's
+    /// iterations together moves a particle by at most [`JITTER_SPREAD`] of the spread: a
+    /// fixed jitter would blur a posterior narrower than it (the last tens of micrometres
+    /// of a fit) and with it what the earlier contacts said.
     fn jitter(&mut self) {
         let n = self.cfg.particles;
         let s = self.cfg.jitter as f32;
         if s == 0.0 {
             return;
         }
+        let per_iteration = (JITTER_SPREAD / (self.cfg.iterations as f64).sqrt()) as f32;
         for (k, a) in self.lookup.axes().iter().enumerate() {
             let top = a.top();
             if top == 0.0 {
                 continue;
             }
-            noise::jitter(&mut self.rng, &mut self.pos[k * n..(k + 1) * n], s, top);
+            let values = &mut self.pos[k * n..(k + 1) * n];
+            let scale = s.min(per_iteration * spread(values, &self.lw));
+            noise::jitter(&mut self.rng, values, scale, top);
         }
     }
 }
 
 /// What one measurement offers the particles, ready for every iteration.
 struct Evidence {
+    /// The negative contact with the TCP's x, y (m), when the contact did not go in.
+    negative: Option<(NegativeContact, [f64; 2])>,
     /// TCP shift of each map axis (grid units).
     shift: Vec<f32>,
     /// Measured channels, padded.
@@ -410,6 +451,17 @@ struct Evidence {
     force: bool,
     /// The image's detections, prepared.
     vision: Option<Prepared>,
+}
+
+/// Weighted standard deviation of `values` under the normalised log weights `lw`.
+fn spread(values: &[f32], lw: &[f32]) -> f32 {
+    let (mut m, mut m2) = (0.0f64, 0.0f64);
+    for (&v, &l) in values.iter().zip(lw) {
+        let (w, v) = (f64::from(l.exp()), f64::from(v));
+        m += w * v;
+        m2 += w * v * v;
+    }
+    (m2 - m * m).max(0.0).sqrt() as f32
 }
 
 /// A uniform number in [0, 1).

@@ -9,7 +9,7 @@ use rand_xoshiro::rand_core::SeedableRng;
 
 use super::state::{Reader, Writer};
 use super::*;
-use ftfusion_testkit::{field, peg_map};
+use ftfusion_testkit::{HOLE_DEPTH, field, peg_map};
 
 const STEP: f64 = 2.5e-4;
 
@@ -361,7 +361,8 @@ fn nearest_lookup_reads_cells_and_multilinear_interpolates() {
         .expect("2 coords");
     let mut ll = [0.0f32; 1];
     let meas: [f32; LANES] = std::array::from_fn(|l| if l < 7 { want[l] as f32 } else { 0.0 });
-    let inv = [1.0f32; LANES];
+    // Every channel but the contact lane, which the filter never weighs.
+    let inv: [f32; LANES] = std::array::from_fn(|l| if l < 7 { 1.0 } else { 0.0 });
     lookup.log_likelihood(
         Interpolation::Multilinear,
         &half,
@@ -508,4 +509,117 @@ fn non_finite_detections_are_refused_by_name() {
         .expect_err("NaN");
     assert!(e.to_string().contains("vision.right_distance"), "{e}");
     assert_eq!(f.measurements(), 0);
+}
+
+#[test]
+fn an_inserted_corner_does_not_blend_into_a_contact_wrench() {
+    // 0.1 mm grid, 0.05 mm clearance: only the centre cell is inserted. 0.06 mm off the
+    // centre along +x the contact corners are the cells at (0.1, 0) and (0.1, -0.1): the
+    // interpolated torque is theirs renormalised, not 40 % of the way to the centre's zero.
+    let step = 1e-4;
+    let map = peg_map(5e-3, step, None).expect("map");
+    let lookup = Lookup::new(&map, Path::new("m")).expect("lookup");
+    let (x, y) = (0.6 * step, -0.5 * step);
+    let u = [lookup.axes()[0].coord(x), lookup.axes()[1].coord(y)];
+    let got = lookup.at(&u);
+    // Corner weights: (0, 0) inserted; (1, 0) 0.6 * 0.5; (0, -1) 0.4 * 0.5; (1, -1) 0.6 * 0.5.
+    let cell = |i: f64, j: f64| field(i * step, j * step, 0.0, 0.0);
+    let (a, b, c) = (cell(1.0, 0.0), cell(0.0, -1.0), cell(1.0, -1.0));
+    for ch in 3..5 {
+        let want = (0.3 * a[ch] + 0.2 * b[ch] + 0.3 * c[ch]) / 0.8;
+        assert!((got[ch] - want).abs() < 1e-6, "channel {ch}: {got:?}");
+    }
+    // The depth channel still blends: the inserted centre pulls it down.
+    assert!(got[6] < 0.9 * HOLE_DEPTH as f32, "{got:?}");
+    // Blended with the centre's zero, as the map's own interpolation does, it is 20 % less.
+    let blended = map.interpolate(&[x, y]).expect("inside");
+    assert!(
+        (f64::from(got[4]) - blended[4] / 0.8).abs() < 1e-6,
+        "{got:?} {blended:?}"
+    );
+}
+
+/// A filter over the 0.1 mm analytic map (0.05 mm clearance), all particles within 0.3 mm
+/// of the goal, after one contact at the goal with part B 0.07 mm off along +x.
+fn near_the_hole(clearance: f64) -> (Filter, [f64; 2]) {
+    let map = peg_map(5e-3, 1e-4, None).expect("map");
+    let mut f = Filter::new(
+        &map,
+        Path::new("synthetic"),
+        Config {
+            particles: 4000,
+            iterations: 1,
+            clearance,
+            ..Config::default()
+        },
+    )
+    .expect("filter");
+    let n = f.cfg.particles;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
+    for k in 0..2 {
+        let a = f.lookup.axes()[k];
+        for i in 0..n {
+            let v: f64 = unit(&mut rng);
+            f.pos[k * n + i] = a.coord((v - 0.5) * 6e-4);
+        }
+    }
+    let truth = [7e-5, 0.0];
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(4);
+    f.measure(&measurement(truth[0], truth[1], [0.0, 0.0], 1e-4, &mut rng))
+        .expect("finite");
+    (f, truth)
+}
+
+/// Weight of the particles within `[r0, r1)` of `at` (m).
+fn weight_within(f: &Filter, at: [f64; 2], r0: f64, r1: f64) -> f64 {
+    (0..f.cfg.particles)
+        .filter(|&i| {
+            let r = (f.particle(i, 0) - at[0]).hypot(f.particle(i, 1) - at[1]);
+            r >= r0 && r < r1
+        })
+        .map(|i| f.weight(i))
+        .sum()
+}
+
+#[test]
+fn a_negative_contact_rules_out_exactly_the_disc_within_the_clearance() {
+    let (f, truth) = near_the_hole(0.0);
+    let c = f
+        .negative_contact()
+        .expect("the map has a clearance")
+        .clearance;
+    assert_eq!(c, ftfusion_testkit::CLEARANCE);
+    // Nothing left within the clearance of the TCP; the truth, 0.07 mm off, keeps its share.
+    assert!(weight_within(&f, [0.0, 0.0], 0.0, 0.999 * c) < 1e-9);
+    let near_truth = weight_within(&f, truth, 0.0, 2e-5);
+    // The depth channel alone (the negative contact off) smears the inserted disc over a
+    // whole cell of the 0.1 mm grid and wipes out the truth's neighbourhood.
+    let (g, _) = near_the_hole(-1.0);
+    assert!(g.negative_contact().is_none());
+    let smeared = weight_within(&g, truth, 0.0, 2e-5);
+    assert!(
+        near_truth > 10.0 * smeared && near_truth > 0.02,
+        "near the truth: {near_truth} with the negative contact, {smeared} without"
+    );
+}
+
+#[test]
+fn the_jitter_keeps_a_spread_narrower_than_a_grid_step() {
+    // Contacts around a truth between the grid's cells: the spread shrinks below the 0.1 mm
+    // step, as the fixed jitter (0.15 steps per iteration, 0.067 mm per measurement) would
+    // not let it.
+    let map = peg_map(5e-3, 1e-4, None).expect("map");
+    let mut f = Filter::new(&map, Path::new("synthetic"), Config::default()).expect("filter");
+    let truth = [1.234e-3, -0.567e-3];
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(9);
+    let mut tcp = [0.0, 0.0];
+    for _ in 0..8 {
+        f.measure(&measurement(truth[0], truth[1], tcp, 2e-3, &mut rng))
+            .expect("finite");
+        tcp = [f.estimate().pose[0], f.estimate().pose[1]];
+    }
+    // Measured: spread 0.017 / 0.016 mm, error 0.016 mm.
+    let e = f.estimate();
+    assert!(e.std[0].max(e.std[1]) < 2.5e-5, "{e:?}");
+    assert!(error(&f, truth) < 3e-5, "{e:?}");
 }

@@ -59,6 +59,10 @@ pub struct MapMeta {
     pub sources: Vec<SourceMesh>,
     /// Program and version that wrote the map.
     pub generator: String,
+    /// Radial clearance of the fit by the geometry (m): part A goes in wherever part B is
+    /// less than this off the TCP (at zero rotation error); absent when unknown.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clearance: Option<f64>,
 }
 
 /// A Force Torque Map: `NCH` values per cell of a grid, cell-major.
@@ -175,6 +179,7 @@ pub(crate) mod tests {
                 sha256: "00".into(),
             }],
             generator: "test".into(),
+            clearance: None,
         };
         let mut map = FtMap::zeros(grid, meta);
         for cell in 0..map.grid().cells() {

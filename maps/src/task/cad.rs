@@ -275,6 +275,45 @@ impl Geometry {
             }
         }
     }
+
+    /// How far part B may sit off centre along direction `theta` (rad, goal frame) with
+    /// part A still going in, by the geometry (m): the radial clearance for round fits; for
+    /// the octagon, the flats' clearance over the cosine to the nearest flat normal. Circles
+    /// as true circles (their polygons differ by under a micrometre).
+    pub fn insertion_limit(&self, theta: f64) -> f64 {
+        match *self {
+            Self::RoundPeg {
+                peg_radius,
+                hole_radius,
+                ..
+            } => hole_radius - peg_radius,
+            Self::OctagonPeg {
+                peg_across_flats,
+                hole_across_flats,
+                ..
+            } => {
+                // Flat normals at k pi / 4; the nearest is at most pi / 8 away.
+                let off = (theta.rem_euclid(PI / 4.0) - PI / 8.0).abs() - PI / 8.0;
+                (hole_across_flats - peg_across_flats) / 2.0 / off.cos()
+            }
+            Self::GearOnShaft {
+                bore_radius,
+                shaft_radius,
+                ..
+            } => bore_radius - shaft_radius,
+            Self::BearingHousing {
+                bore_radius,
+                seat_radius,
+                ..
+            } => bore_radius - seat_radius,
+        }
+    }
+
+    /// The smallest insertion limit over all directions, the fit's radial clearance (m):
+    /// along +x, a flat normal of the octagon.
+    pub fn clearance(&self) -> f64 {
+        self.insertion_limit(0.0)
+    }
 }
 
 /// Builds the two parts of a task.
@@ -1097,6 +1136,99 @@ mod tests {
                     "side faces point away from the axis"
                 );
             }
+        }
+    }
+
+    /// Points of a part's vertices at height `z` within `r` of the axis (a loop, sorted by angle).
+    fn outline(tris: &[Tri], z: f64, r: f64) -> Vec<[f64; 2]> {
+        let mut pts: Vec<[f64; 2]> = vertices(tris)
+            .into_iter()
+            .filter(|v| (v[2] - z).abs() < EPS && v[0].hypot(v[1]) < r)
+            .map(|v| [v[0], v[1]])
+            .collect();
+        pts.sort_by(|a, b| a[1].atan2(a[0]).total_cmp(&b[1].atan2(b[0])));
+        pts.dedup_by(|a, b| (a[0] - b[0]).hypot(a[1] - b[1]) < EPS);
+        pts
+    }
+
+    /// Whether every point of `inner`, moved by `d`, lies inside the convex loop `outer`.
+    fn contains(outer: &[[f64; 2]], inner: &[[f64; 2]], d: [f64; 2]) -> bool {
+        (0..outer.len()).all(|i| {
+            let (a, b) = (outer[i], outer[(i + 1) % outer.len()]);
+            inner.iter().all(|p| {
+                let q = [p[0] + d[0] - a[0], p[1] + d[1] - a[1]];
+                (b[0] - a[0]) * q[1] - (b[1] - a[1]) * q[0] >= 0.0
+            })
+        })
+    }
+
+    #[test]
+    fn the_insertion_limit_is_where_the_meshes_stop_fitting() {
+        for (task, [file_a, file_b]) in TASKS {
+            let g = geometry(task);
+            let (a, b) = (part(task, file_a), part(task, file_b));
+            // (outer loop, inner loop, sign of B's offset on the inner loop's points).
+            let (outer, inner, sign) = match g {
+                Geometry::RoundPeg {
+                    hole_radius,
+                    hole_depth,
+                    ..
+                } => (
+                    outline(&b, hole_depth, 1.5 * hole_radius),
+                    outline(&a, 0.0, 1.5 * hole_radius),
+                    -1.0,
+                ),
+                Geometry::OctagonPeg {
+                    hole_across_flats,
+                    hole_depth,
+                    ..
+                } => (
+                    outline(&b, hole_depth, hole_across_flats),
+                    outline(&a, 0.0, hole_across_flats),
+                    -1.0,
+                ),
+                Geometry::GearOnShaft {
+                    bore_radius,
+                    shaft_length,
+                    ..
+                } => (
+                    outline(&a, 0.0, 1.01 * bore_radius),
+                    outline(&b, shaft_length, 1.01 * bore_radius),
+                    1.0,
+                ),
+                Geometry::BearingHousing {
+                    bore_radius,
+                    seat_height,
+                    ..
+                } => (
+                    outline(&a, 0.0, 1.01 * bore_radius),
+                    outline(&b, seat_height, 1.01 * bore_radius),
+                    1.0,
+                ),
+            };
+            assert!(outer.len() >= 8 && inner.len() >= 8, "{task}");
+            for k in 0..8 {
+                let theta = f64::from(k) * PI / 16.0;
+                let fits = |d: f64| {
+                    contains(
+                        &outer,
+                        &inner,
+                        [sign * d * theta.cos(), sign * d * theta.sin()],
+                    )
+                };
+                let (mut lo, mut hi) = (0.0, MM);
+                assert!(fits(lo) && !fits(hi), "{task}");
+                for _ in 0..50 {
+                    let mid = 0.5 * (lo + hi);
+                    if fits(mid) { lo = mid } else { hi = mid }
+                }
+                let limit = g.insertion_limit(theta);
+                assert!(
+                    (lo - limit).abs() < 1e-6,
+                    "{task} at {theta}: meshes {lo}, geometry {limit}"
+                );
+            }
+            assert!(g.clearance() <= g.insertion_limit(0.3), "{task}");
         }
     }
 }
