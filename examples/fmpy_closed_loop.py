@@ -3,9 +3,11 @@
 through MuJoCo's Python bindings (mujoco==3.17.0) and FtFusion.fmu through FMPy.
 
 It repeats the Rust harness's contact motion step for step (harness/src/sim.rs): reset,
-place part B (mocap body) at the true offset, put the carriage 1 mm above part B's top (the
-scene's `start` keyframe height) at the commanded point, press with the task's force until
-the approach speed stays below 1e-4 m/s for 20 steps with a contact (at most 2000 steps).
+place part B (mocap body) at the true offset, put the carriage 0.1 mm above part B's top
+(the scene's `start` keyframe height) at the commanded point, press with the task's force
+against the feed's damping until the approach speed stays below 1e-4 m/s for 10 ms with a
+contact (at most 2 s); once part A is 0.1 mm below part B's top, the feed drives it down at
+0.1 m/s.
 The wrench handed to the FMU is the negated raw sensor reading (harness/src/sensor.rs),
 without noise; the FMU's seed of trial i is seed + i. Success: the task frame settles less
 than 1 mm above the goal.
@@ -26,7 +28,8 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 ROOT = Path(__file__).resolve().parent.parent
-MAX_STEPS, SETTLE_SPEED, SETTLE_STEPS = 2000, 1.0e-4, 20
+MAX_TIME, SETTLE_SPEED, SETTLE_TIME = 2.0, 1.0e-4, 0.01
+APPROACH_CLEARANCE, ENTRY_DEPTH, INSERTION_SPEED = 0.0001, 0.0001, 0.1
 SUCCESS_HEIGHT = 0.001
 STEP = 0.001
 
@@ -42,11 +45,12 @@ class Cell:
         m = self.model
         self.qpos = [m.jnt_qposadr[m.joint(n).id] for n in ("x", "y", "z")]
         self.dof_z = m.jnt_dofadr[m.joint("z").id]
-        self.act = [m.actuator(n).id for n in ("servo_x", "servo_y", "press")]
+        self.act = [m.actuator(n).id for n in ("servo_x", "servo_y", "press", "feed")]
         self.force_adr = m.sensor_adr[m.sensor("ft_force").id]
         self.torque_adr = m.sensor_adr[m.sensor("ft_torque").id]
         self.mocap = m.body_mocapid[m.body("part_b").id]
         self.start_z = m.key("start").qpos[self.qpos[2]]
+        self.entered = self.start_z - APPROACH_CLEARANCE - ENTRY_DEPTH
 
     def contact(self, obj, xy):
         """One contact motion at the commanded point `xy`; returns (wrench, tcp, settled)."""
@@ -55,17 +59,20 @@ class Cell:
         d.mocap_pos[self.mocap] = [obj[0], obj[1], 0.0]
         for q, v in zip(self.qpos, (xy[0], xy[1], self.start_z)):
             d.qpos[q] = v
-        for a, v in zip(self.act, (xy[0], xy[1], -self.force)):
+        for a, v in zip(self.act, (xy[0], xy[1], -self.force, 0.0)):
             d.ctrl[a] = v
+        max_steps, settle_steps = round(MAX_TIME / m.opt.timestep), round(SETTLE_TIME / m.opt.timestep)
         calm = steps = 0
-        while steps < MAX_STEPS and calm < SETTLE_STEPS:
+        while steps < max_steps and calm < settle_steps:
             mujoco.mj_step(m, d)
             steps += 1
+            if d.qpos[self.qpos[2]] < self.entered:
+                d.ctrl[self.act[3]] = -INSERTION_SPEED
             calm = calm + 1 if abs(d.qvel[self.dof_z]) < SETTLE_SPEED and d.ncon > 0 else 0
         raw = list(d.sensordata[self.force_adr : self.force_adr + 3]) + list(d.sensordata[self.torque_adr : self.torque_adr + 3])
         wrench = [-v for v in raw]
         tcp = [float(d.qpos[q]) for q in self.qpos]
-        return wrench, tcp, calm >= SETTLE_STEPS
+        return wrench, tcp, calm >= settle_steps
 
 
 class Estimator:
@@ -119,9 +126,9 @@ def run_trials(offsets, task="peg_in_hole", fmu=None, seed=1, max_contacts=30, m
         est = Estimator(fmu, md, unzipdir, seed + i, map_path)
         target, contacts, success, tcp = [0.0, 0.0], 0, False, [0.0, 0.0, 0.0]
         while contacts < max_contacts:
-            wrench, tcp, _settled = cell.contact(obj, target)
+            wrench, tcp, settled = cell.contact(obj, target)
             contacts += 1
-            if tcp[2] < SUCCESS_HEIGHT:
+            if settled and tcp[2] < SUCCESS_HEIGHT:
                 success = True
                 break
             target = est.measure(wrench, tcp)

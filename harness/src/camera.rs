@@ -12,7 +12,7 @@ use mujoco_rs::prelude::*;
 use mujoco_rs::renderer::{MjRenderer, png};
 
 use crate::error::{HarnessError, Result, create_parent};
-use crate::scene::{APPROACH_CLEARANCE, SceneSpec};
+use crate::scene::{LOOK_CLEARANCE, SceneSpec};
 
 pub use ftmap::vision::Camera;
 
@@ -214,9 +214,10 @@ impl CameraScene {
         d.forward();
     }
 
-    /// The task frame's height when a contact motion starts (m): part A hangs just above part B.
-    pub fn approach_height(&self) -> f64 {
-        self.spec.top + APPROACH_CLEARANCE
+    /// The task frame's height where a first image is taken (m): part A hovers
+    /// [`LOOK_CLEARANCE`] above part B.
+    pub fn look_height(&self) -> f64 {
+        self.spec.top + LOOK_CLEARANCE
     }
 
     /// The pinhole model of the camera, as placed.

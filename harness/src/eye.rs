@@ -49,9 +49,9 @@ impl Eye {
         &self.model
     }
 
-    /// The task frame's height before a contact motion (m).
-    pub fn approach_height(&self) -> f64 {
-        self.scene.approach_height()
+    /// The task frame's height where the first image is taken, before any contact (m).
+    pub fn look_height(&self) -> f64 {
+        self.scene.look_height()
     }
 
     /// Renders part B at `object` and the task frame at `tcp` (m), adds the image noise

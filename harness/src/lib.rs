@@ -11,9 +11,10 @@
 //!   [`trial`], one trial (Algorithm 1 or the spiral search); [`campaign`], campaigns set
 //!   up and run; [`report`], `trials.csv`, `measurements.csv` and `summary.json`;
 //!   [`calibration`], whether the reported spread tells the truth; [`plot`], the plots;
-//! - [`scan`], measured maps; [`compare`], two maps' agreement and two campaigns side by
+//! - [`boundary`], where the scene accepts part A against the geometry; [`scan`], measured maps; [`compare`], two maps' agreement and two campaigns side by
 //!   side; [`render`], one camera image with its edges, and the detectors' timing.
 
+pub mod boundary;
 pub mod calibration;
 pub mod camera;
 pub mod campaign;

@@ -66,7 +66,7 @@ impl View {
         task_model(&task, designed)?;
         let mut scene = CameraScene::load(&scene_path(&task), spec)?;
         let model = task_model(&task, scene.camera())?;
-        let tcp = [options.tcp[0], options.tcp[1], scene.approach_height()];
+        let tcp = [options.tcp[0], options.tcp[1], scene.look_height()];
         let object = [options.object[0], options.object[1], 0.0];
         scene.place(options.object, tcp);
         let t0 = Instant::now();

@@ -5,17 +5,21 @@
 //! whose position is the true object offset of a trial. Part A hangs under a carriage
 //! with slide joints `x`, `y`, `z` (the task frame's position relative to the nominal goal,
 //! i.e. the TCP): stiff position servos across the approach, a motor along it pressing
-//! with the task's imposed force; gravity is off so that the settled contact force is the
+//! with the task's imposed force against a velocity servo, the feed (see `sim`); gravity is off so that the settled contact force is the
 //! imposed force. The F/T sensor (`ft_force`, `ft_torque`) sits on site `ft` of body
 //! `part_a`, at the task's sensor origin.
 //!
 //! Collision uses convex pieces only. Part B's top and walls tile the surface exactly
 //! (convex prisms between the hole polygon and a square, boxes outside it, a bottom box):
 //! overlapping pieces would double the contact stiffness where they overlap and skew the
-//! pressure. Part A's contact face is a bed of small spheres on a hexagonal lattice plus a
-//! ring on each boundary, so that the rim pressure spreads evenly as in the map's centroid
-//! model. The STL meshes are visuals only (contype 0). The MJCF also loads in MuJoCo 2.2.2
-//! (`autolimits`, no `multiccd`, Euler integrator with implicit joint damping).
+//! pressure. Part A's contact face is a bed of tiny spheres ([`SPHERE_RADIUS`]): rings along
+//! each boundary, the outermost touching it, and a hexagonal lattice inside, each sphere
+//! standing for the same area, so that the pressure spreads evenly as in the map's centroid
+//! model. Tiny, so that the face's edge is as sharp as the CAD's: spheres of radius r round
+//! it by r and roll over part B's edges, and MuJoCo then accepts the part up to r farther off
+//! centre than the geometry does (`harness boundary` measures it). The STL meshes are visuals only (contype 0). The MJCF also loads in MuJoCo 2.2.2
+//! (`autolimits`, no `multiccd`, Euler integrator with implicit joint damping across the
+//! approach).
 
 use std::f64::consts::{PI, TAU};
 use std::fmt::Write as _;
@@ -27,22 +31,33 @@ use ftmap::vision::Camera;
 
 use crate::error::{HarnessError, Result};
 
-/// Radius of the spheres of part A's contact bed (m).
-pub const SPHERE_RADIUS: f64 = 0.0001;
+/// Radius of the spheres of part A's contact bed (m): the face's edge acts as a round of
+/// this radius, and no sphere rolls over part B's edges.
+pub const SPHERE_RADIUS: f64 = 0.000002;
+/// Rings of spheres along each outline of the contact face.
+pub const RIM_RINGS: usize = 4;
 /// Polygon count of a round hole's walls.
 pub const HOLE_SIDES: usize = 48;
 /// Approach starts this far above part B's top (m).
-pub const APPROACH_CLEARANCE: f64 = 0.001;
+pub const APPROACH_CLEARANCE: f64 = 0.0001;
+/// A first image (before any contact) is taken with part A this far above part B's top (m).
+pub const LOOK_CLEARANCE: f64 = 0.001;
 /// Mass of the carriage, the heavy moving body (kg).
 pub const CARRIAGE_MASS: f64 = 5.0;
 /// Stiffness of the position servos across the approach (N/m).
 pub const SERVO_KP: f64 = 1.0e6;
-/// Damping along the approach (N s/m): sets the approach speed, force / damping.
-pub const APPROACH_DAMPING: f64 = 1000.0;
-/// Contact solver reference (time constant, damping ratio): stiff contacts.
-const SOLREF: &str = "0.002 1";
-/// Contact impedance (d0, dwidth, width).
-const SOLIMP: &str = "0.99 0.999 0.0005";
+/// Gain of the feed along the approach (N s/m): with the feed at rest, a damping that sets
+/// the approach speed, force / gain (5 mm/s at 50 N: 1 µm per step).
+pub const APPROACH_DAMPING: f64 = 10000.0;
+/// Simulation time step (s).
+pub const TIMESTEP: f64 = 0.0002;
+/// Contact solver reference (time constant, damping ratio): stiff contacts, the time
+/// constant 2.5 steps, so that a part resting on an edge sinks by nanometres.
+const SOLREF: &str = "0.0005 1";
+/// Contact impedance (d0, dwidth, width): soft enough that the load spreads over the
+/// contacts as over springs (closer to 1, the solver piles it on a few), stiff enough that
+/// a part resting on an edge sinks by nanometres.
+const SOLIMP: &str = "0.9 0.95 0.0005";
 
 /// A calibrated camera of the work cell (experiment D of the paper): MJCF `<camera>`.
 #[derive(Debug, Clone, PartialEq)]
@@ -129,13 +144,21 @@ pub struct Face {
 }
 
 impl Face {
-    /// Sphere centres (x, y) of the bed, in the task frame.
+    /// Sphere centres (x, y) of the bed, in the task frame: [`RIM_RINGS`] rings along each
+    /// outline across a band one pitch wide, the outermost touching the outline, then the
+    /// lattice. Every sphere stands for about the same area of the face (a lattice cell), so
+    /// that the pressure spreads evenly, also over a crescent thinner than the pitch.
     pub fn bed(&self) -> Vec<[f64; 2]> {
-        let (r, p) = (SPHERE_RADIUS, self.pitch);
-        let near_edge = r + 0.5 * p;
-        let mut pts: Vec<[f64; 2]> = self.outer.ring(-r, p);
-        if let Some(inner) = &self.inner {
-            pts.extend(inner.ring(r, p));
+        let p = self.pitch;
+        let cell = p * p * 3f64.sqrt() / 2.0;
+        let (ring_step, ring_pitch) = (p / RIM_RINGS as f64, cell * RIM_RINGS as f64 / p);
+        let mut pts = Vec::new();
+        for k in 0..RIM_RINGS {
+            let inset = SPHERE_RADIUS + k as f64 * ring_step;
+            pts.extend(self.outer.ring(-inset, ring_pitch));
+            if let Some(inner) = &self.inner {
+                pts.extend(inner.ring(inset, ring_pitch));
+            }
         }
         let row = p * 3f64.sqrt() / 2.0;
         let (ni, nj) = (
@@ -146,11 +169,8 @@ impl Face {
             let shift = if j.rem_euclid(2) == 1 { 0.5 * p } else { 0.0 };
             for i in -ni..=ni {
                 let q = [i as f64 * p + shift, j as f64 * row];
-                let outside_inner = self
-                    .inner
-                    .as_ref()
-                    .is_none_or(|o| -o.inside(q) >= near_edge);
-                if self.outer.inside(q) >= near_edge && outside_inner {
+                let outside_inner = self.inner.as_ref().is_none_or(|o| -o.inside(q) >= p);
+                if self.outer.inside(q) >= p && outside_inner {
                     pts.push(q);
                 }
             }
@@ -427,7 +447,8 @@ impl SceneSpec {
         );
         let _ = writeln!(
             x,
-            "  <option timestep=\"0.001\" cone=\"elliptic\" gravity=\"0 0 0\"/>"
+            "  <option timestep=\"{}\" cone=\"elliptic\" gravity=\"0 0 0\"/>",
+            f(TIMESTEP)
         );
         let _ = writeln!(x, "  <size njmax=\"6000\" nconmax=\"2000\"/>");
         if let Some(c) = &self.camera {
@@ -544,8 +565,7 @@ impl SceneSpec {
         );
         let _ = writeln!(
             x,
-            "      <joint name=\"z\" type=\"slide\" axis=\"0 0 1\" damping=\"{}\" ref=\"0\"/>",
-            f(APPROACH_DAMPING)
+            "      <joint name=\"z\" type=\"slide\" axis=\"0 0 1\" ref=\"0\"/>"
         );
         let _ = writeln!(
             x,
@@ -595,6 +615,11 @@ impl SceneSpec {
             "    <motor name=\"press\" joint=\"z\" ctrlrange=\"{} {}\"/>",
             f(-4.0 * self.force),
             f(4.0 * self.force)
+        );
+        let _ = writeln!(
+            x,
+            "    <velocity name=\"feed\" joint=\"z\" kv=\"{}\"/>",
+            f(APPROACH_DAMPING)
         );
         let _ = writeln!(x, "  </actuator>");
         let _ = writeln!(x, "  <sensor>");

@@ -4,8 +4,15 @@
 //! A contact motion starts from a reset state: the lift and the transfer to the next
 //! approach point happen in free space and are not simulated; the carriage is placed
 //! `APPROACH_CLEARANCE` above part B's top at the commanded (x, y) and the press motor
-//! pushes with the imposed force. So each contact is a pure function of the object offset
-//! and the commanded point (the FMPy script reproduces it step for step).
+//! pushes with the imposed force against the feed's damping, a slow guarded approach. When
+//! part A has dropped into part B by [`ENTRY_DEPTH`], the feed drives it down at
+//! [`INSERTION_SPEED`] until it settles on the goal. So each contact is a pure function of
+//! the object offset and the commanded point (the FMPy script reproduces it step for step).
+//!
+//! Why slow: MuJoCo's contacts are found by penetration after each step. A part arriving
+//! fast sinks into the top face for a step, and where its edge overlaps the top by less
+//! than that sinking the nearest face is the hole's wall, which pushes it in: the hole then
+//! accepts the part farther off centre than the geometry does (`harness boundary`).
 
 use std::path::{Path, PathBuf};
 
@@ -15,12 +22,19 @@ use mujoco_rs::prelude::*;
 use crate::error::{HarnessError, Result};
 use crate::scene::{APPROACH_CLEARANCE, SceneSpec, scene_path, write_scene};
 
-/// Longest contact motion (steps of 1 ms) before it is reported as not settled.
-pub const MAX_STEPS: usize = 2000;
+/// Longest contact motion (s of simulated time) before it is reported as not settled.
+pub const MAX_TIME: f64 = 2.0;
 /// The contact has settled when the approach speed stays below this (m/s) ...
 pub const SETTLE_SPEED: f64 = 1.0e-4;
-/// ... for this many consecutive steps with at least one contact.
-pub const SETTLE_STEPS: usize = 20;
+/// ... for this long (s) with at least one contact.
+pub const SETTLE_TIME: f64 = 0.01;
+/// Part A has entered part B once its frame is this far below part B's top (m).
+pub const ENTRY_DEPTH: f64 = 0.0001;
+/// The feed's speed down to the goal once part A has entered (m/s).
+pub const INSERTION_SPEED: f64 = 0.1;
+/// A contact motion ending with the task frame below this height above the goal has
+/// inserted part A (m).
+pub const SUCCESS_HEIGHT: f64 = 0.001;
 
 /// What one contact motion ends with.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -29,8 +43,10 @@ pub struct Contact {
     pub raw: [f64; 6],
     /// Task frame position relative to the nominal goal frame at the end (m).
     pub tcp: [f64; 3],
-    /// Whether the motion settled within [`MAX_STEPS`].
+    /// Whether the motion settled within [`MAX_TIME`].
     pub settled: bool,
+    /// Whether part A settled on the goal: inserted.
+    pub inserted: bool,
     /// Simulated time of the motion (s).
     pub time: f64,
 }
@@ -41,7 +57,7 @@ pub struct Sim {
     spec: SceneSpec,
     qpos: [usize; 3],
     dof_z: usize,
-    actuators: [usize; 3],
+    actuators: [usize; 4],
     sensors: [usize; 2],
     mocap: usize,
     object: [f64; 2],
@@ -77,7 +93,12 @@ impl Sim {
         let qpos = [adr[jx] as usize, adr[jy] as usize, adr[jz] as usize];
         let dof_z = model.jnt_dofadr()[jz] as usize;
         let act = |name| id(&model, MjtObjBase::mjOBJ_ACTUATOR, "actuator", name);
-        let actuators = [act("servo_x")?, act("servo_y")?, act("press")?];
+        let actuators = [
+            act("servo_x")?,
+            act("servo_y")?,
+            act("press")?,
+            act("feed")?,
+        ];
         let sensor = |name| id(&model, MjtObjBase::mjOBJ_SENSOR, "sensor", name);
         let sensors = [
             model.sensor_adr()[sensor("ft_force")?] as usize,
@@ -136,15 +157,23 @@ impl Sim {
         for (k, &q) in self.qpos.iter().enumerate() {
             d.qpos_mut()[q] = start[k];
         }
-        let ctrl = [xy[0], xy[1], -self.spec.force];
+        let ctrl = [xy[0], xy[1], -self.spec.force, 0.0];
         for (k, &a) in self.actuators.iter().enumerate() {
             d.ctrl_mut()[a] = ctrl[k];
         }
-        let mut calm = 0;
-        let mut steps = 0;
-        while steps < MAX_STEPS && calm < SETTLE_STEPS {
+        let dt = d.model().opt().timestep;
+        let (max_steps, settle_steps) = (
+            (MAX_TIME / dt).round() as usize,
+            (SETTLE_TIME / dt).round() as usize,
+        );
+        let entered = self.spec.top - ENTRY_DEPTH;
+        let (mut calm, mut steps) = (0, 0);
+        while steps < max_steps && calm < settle_steps {
             d.step();
             steps += 1;
+            if d.qpos()[self.qpos[2]] < entered {
+                d.ctrl_mut()[self.actuators[3]] = -INSERTION_SPEED;
+            }
             if d.qvel()[self.dof_z].abs() < SETTLE_SPEED && d.ncon() > 0 {
                 calm += 1;
             } else {
@@ -158,10 +187,12 @@ impl Sim {
         let tcp = [q[self.qpos[0]], q[self.qpos[1]], q[self.qpos[2]]];
         let time = d.time();
         self.simulated += time;
+        let settled = calm >= settle_steps;
         Contact {
             raw,
             tcp,
-            settled: calm >= SETTLE_STEPS,
+            settled,
+            inserted: settled && tcp[2] < SUCCESS_HEIGHT,
             time,
         }
     }

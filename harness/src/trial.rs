@@ -3,8 +3,8 @@
 //! camera (experiment D), an image is taken before the first contact motion (handed to the
 //! FMU alone) and at every contact (handed with the wrench).
 //!
-//! Success: a contact motion settles with the task frame less than [`SUCCESS_HEIGHT`]
-//! above the goal, i.e. the part slid down to (near) the goal depth. Every contact motion
+//! Success: a contact motion inserts the part (it settles with the task frame less than
+//! [`SUCCESS_HEIGHT`](crate::sim::SUCCESS_HEIGHT) above the goal). Every contact motion
 //! counts, the successful one included; a trial ends as a failure after `max_contacts`
 //! motions or `max_sim_time` of simulated time.
 
@@ -18,9 +18,6 @@ use crate::eye::Eye;
 use crate::fmu_driver::{Estimate, Fmu, Settings};
 use crate::sensor::{Noise, map_wrench};
 use crate::sim::Sim;
-
-/// A contact ending with the task frame below this height above the goal is a success (m).
-pub const SUCCESS_HEIGHT: f64 = 0.001;
 
 /// How the next approach point is chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -147,7 +144,7 @@ pub fn run_trial(
     let mut sim_wall = 0.0;
     let (mut first_look, mut images_missed) = (None, 0);
     if let (Some(e), Some(eye)) = (estimator.as_mut(), eye.as_deref_mut()) {
-        let tcp = [target[0], target[1], eye.approach_height()];
+        let tcp = [target[0], target[1], eye.look_height()];
         match eye.look(offset, tcp, seed)? {
             Some(f) => {
                 let est = e.look(tcp, &f)?;
@@ -168,7 +165,7 @@ pub fn run_trial(
         let c = sim.contact_motion(target);
         sim_wall += t0.elapsed().as_secs_f64();
         let wrench = cfg.noise.apply(map_wrench(c.raw), &mut rng);
-        if c.tcp[2] < SUCCESS_HEIGHT {
+        if c.inserted {
             steps.push(Step {
                 tcp: c.tcp,
                 wrench,

@@ -38,7 +38,7 @@ fn hough_edges_match_the_projected_geometry_and_detect_line() {
         ([0.001, 0.002], [0.0005, -0.001]),
     ];
     for (k, (object, tcp_xy)) in cases.iter().enumerate() {
-        let tcp = [tcp_xy[0], tcp_xy[1], view.approach_height()];
+        let tcp = [tcp_xy[0], tcp_xy[1], view.look_height()];
         view.place(*object, tcp);
         let image = view.render().expect("offscreen rendering (Mesa EGL)");
         let cam = view.camera();

@@ -24,7 +24,7 @@ fn errors(
     tcp_xy: [f64; 2],
     noise: Option<u64>,
 ) -> Vec<(String, f64, f64)> {
-    let tcp = [tcp_xy[0], tcp_xy[1], view.approach_height()];
+    let tcp = [tcp_xy[0], tcp_xy[1], view.look_height()];
     view.place(object, tcp);
     let image = view.render().expect("offscreen rendering (Mesa EGL)");
     let cam = view.camera();
@@ -112,7 +112,7 @@ fn camera_model_projects_like_mujoco_renders() {
         .replace("<worldbody>", &format!("<worldbody>{spheres}"));
     let spec = SceneSpec::of_task(&task).expect("spec");
     let mut view = CameraScene::from_xml_string(&xml, spec).expect("scene with markers");
-    view.place([0.0, 0.0], [0.0, 0.0, view.approach_height()]);
+    view.place([0.0, 0.0], [0.0, 0.0, view.look_height()]);
     let image = view.render().expect("offscreen rendering (Mesa EGL)");
     let cam = view.camera();
     let gray = image.to_gray();
@@ -151,7 +151,7 @@ fn camera_model_projects_like_mujoco_renders() {
 fn no_part_in_view_gives_feature_not_found() {
     let _gl = GL.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     let (task, mut view, model) = common::bearing();
-    let tcp = [0.0, 0.0, view.approach_height()];
+    let tcp = [0.0, 0.0, view.look_height()];
     view.place([0.0, 0.0], tcp);
     let expected = model_edges(&model, &view.camera(), tcp, [0.0; 3]);
     // Both parts moved 1 m aside: nothing in the camera's view.
@@ -189,7 +189,7 @@ fn no_part_in_view_gives_feature_not_found() {
 #[test]
 fn camera_model_is_mujocos_camera() {
     let (_, mut view, _) = common::bearing();
-    view.place([0.0, 0.0], [0.0, 0.0, view.approach_height()]);
+    view.place([0.0, 0.0], [0.0, 0.0, view.look_height()]);
     let cam = view.camera();
     let spec = view.spec().camera.clone().expect("scene camera").camera;
     assert_eq!((cam.width, cam.height), (640, 480));
@@ -327,7 +327,7 @@ fn measured_features_match_the_particle_side_model() {
             if tcp[2] > 0.0 {
                 tcp[2]
             } else {
-                view.approach_height()
+                view.look_height()
             },
         ];
         view.place(object, tcp);

@@ -98,6 +98,16 @@ pub enum Command {
         #[arg(long)]
         size: Option<f64>,
     },
+    /// Where each scene accepts part A (a centred contact motion, part B moved off by
+    /// bisection) against the geometry's insertion limit.
+    Boundary {
+        /// Task name or task.toml path; default: every task with a scene.
+        #[arg(long)]
+        task: Option<String>,
+        /// Directions over a half turn.
+        #[arg(long, default_value_t = 8)]
+        directions: usize,
+    },
     /// Two campaigns side by side (their trials.csv): contacts, contact measurements, y
     /// spread, trial by trial when they ran the same offsets; writes a plot.
     CompareRuns {

@@ -12,7 +12,7 @@ use harness::campaign::{Campaign, CampaignOptions, Offsets};
 use harness::compare::{MapComparison, RunsComparison};
 use harness::render::{RenderOptions, View};
 use harness::scan::{ScanOptions, scan_to_file};
-use harness::{runtime, scene, sim};
+use harness::{boundary, runtime, scene, sim};
 
 use cli::{Cli, Command, mm};
 
@@ -94,6 +94,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 half_width: size.map(mm),
             })?;
             println!("{scanned}");
+        }
+        Command::Boundary { task, directions } => {
+            for t in scene::tasks_named(task.as_deref())? {
+                let mut sim = sim::Sim::of_task(&t)?;
+                let found = boundary::boundaries(&mut sim, &t, &boundary::directions(directions))?;
+                print!("{found}");
+            }
         }
         Command::CompareMaps { a, b, plot } => {
             let comparison = MapComparison::of_files(&a, &b)?;
