@@ -16,6 +16,7 @@ mkdir -p out
 target/release/ftmap generate --task peg_in_hole --out out/peg.ftmap
 target/release/ftmap plot out/peg.ftmap --channel ty --out out/peg_ty.png
 target/release/harness scene --check
+target/release/harness boundary                  # where each scene accepts part A, against the geometry
 target/release/harness trials --task peg_in_hole --trials 20 --seed 7 --out runs/peg
 target/release/harness trials --task bearing_housing --trials 20 --seed 3 --vision --out runs/d_vision
 target/release/harness trials --task bearing_housing --trials 20 --seed 3 --out runs/d_force

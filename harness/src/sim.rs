@@ -6,7 +6,8 @@
 //! `APPROACH_CLEARANCE` above part B's top at the commanded (x, y) and the press motor
 //! pushes with the imposed force against the feed's damping, a slow guarded approach. When
 //! part A has dropped into part B by [`ENTRY_DEPTH`], the feed drives it down at
-//! [`INSERTION_SPEED`] until it settles on the goal. So each contact is a pure function of
+//! [`INSERTION_SPEED`], slowing down over the last [`INSERTION_TIME`] (its speed the height
+//! left over that time), until it settles on the goal under the imposed force. So each contact is a pure function of
 //! the object offset and the commanded point (the FMPy script reproduces it step for step).
 //!
 //! Why slow: MuJoCo's contacts are found by penetration after each step. A part arriving
@@ -30,8 +31,10 @@ pub const SETTLE_SPEED: f64 = 1.0e-4;
 pub const SETTLE_TIME: f64 = 0.01;
 /// Part A has entered part B once its frame is this far below part B's top (m).
 pub const ENTRY_DEPTH: f64 = 0.0001;
-/// The feed's speed down to the goal once part A has entered (m/s).
+/// The feed's speed down to the goal once part A has entered (m/s) ...
 pub const INSERTION_SPEED: f64 = 0.1;
+/// ... at most the height left over this time (s).
+pub const INSERTION_TIME: f64 = 0.01;
 /// A contact motion ending with the task frame below this height above the goal has
 /// inserted part A (m).
 pub const SUCCESS_HEIGHT: f64 = 0.001;
@@ -171,8 +174,9 @@ impl Sim {
         while steps < max_steps && calm < settle_steps {
             d.step();
             steps += 1;
-            if d.qpos()[self.qpos[2]] < entered {
-                d.ctrl_mut()[self.actuators[3]] = -INSERTION_SPEED;
+            let z = d.qpos()[self.qpos[2]];
+            if z < entered {
+                d.ctrl_mut()[self.actuators[3]] = -INSERTION_SPEED.min(z.max(0.0) / INSERTION_TIME);
             }
             if d.qvel()[self.dof_z].abs() < SETTLE_SPEED && d.ncon() > 0 {
                 calm += 1;

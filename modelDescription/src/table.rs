@@ -280,7 +280,7 @@ pub const VARIABLES: &[Variable] = &[
         "sigma_torque",
         105,
         Real,
-        Start::Real(0.005),
+        Start::Real(0.0075),
         "N.m",
         [Some(1e-9), Some(1e6)],
         "Standard deviation of a measured torque component",

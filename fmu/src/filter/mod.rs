@@ -79,7 +79,7 @@ impl Default for Config {
             seed: 1,
             iterations: 20,
             sigma_force: 1.0,
-            sigma_torque: 0.005,
+            sigma_torque: 0.0075,
             sigma_depth: 0.0005,
             jitter: 0.15,
             confidence_radius: 1e-4,
@@ -415,9 +415,11 @@ impl Filter {
 
     /// Gaussian jitter on every axis, clamped into Omega: `jitter` grid intervals, or less
     /// once the particles' spread is small, so that the jitter of a measurement's
-    /// iterations together moves a particle by at most [`JITTER_SPREAD`] of the spread: a
+    /// iterations together moves a particle by about [`JITTER_SPREAD`] of the spread: a
     /// fixed jitter would blur a posterior narrower than it (the last tens of micrometres
-    /// of a fit) and with it what the earlier contacts said.
+    /// of a fit) and with it what the earlier contacts said. It never falls below that
+    /// share of the fit's clearance (of one grid interval where the map has none), so that
+    /// a set that has collapsed off the truth can still move.
     fn jitter(&mut self) {
         let n = self.cfg.particles;
         let s = self.cfg.jitter as f32;
@@ -430,8 +432,12 @@ impl Filter {
             if top == 0.0 {
                 continue;
             }
+            let scale_of_fit = match &self.negative {
+                Some(nc) if a.tcp.is_some() => (nc.clearance / a.step) as f32,
+                _ => 1.0,
+            };
             let values = &mut self.pos[k * n..(k + 1) * n];
-            let scale = s.min(per_iteration * spread(values, &self.lw));
+            let scale = s.min(per_iteration * spread(values, &self.lw).max(scale_of_fit));
             noise::jitter(&mut self.rng, values, scale, top);
         }
     }

@@ -618,8 +618,9 @@ fn the_jitter_keeps_a_spread_narrower_than_a_grid_step() {
             .expect("finite");
         tcp = [f.estimate().pose[0], f.estimate().pose[1]];
     }
-    // Measured: spread 0.017 / 0.016 mm, error 0.016 mm.
+    // Measured: spread 0.026 / 0.026 mm (the jitter's floor, half the 0.05 mm clearance per
+    // measurement, keeps it there), error 0.021 mm; with the fixed jitter 0.094 / 0.048 mm.
     let e = f.estimate();
-    assert!(e.std[0].max(e.std[1]) < 2.5e-5, "{e:?}");
+    assert!(e.std[0].max(e.std[1]) < 4e-5, "{e:?}");
     assert!(error(&f, truth) < 3e-5, "{e:?}");
 }
