@@ -28,7 +28,7 @@ fn rim_contact(task: &Task) -> ([f64; 6], f64) {
 #[test]
 fn every_scene_loads_and_its_rim_wrench_agrees_with_the_computed_map() {
     let tasks = tasks_with_scenes().unwrap();
-    assert_eq!(tasks.len(), 4);
+    assert_eq!(tasks.len(), 5);
     for task in &tasks {
         let spec = SceneSpec::of_task(task).unwrap();
         let (raw, z) = rim_contact(task);

@@ -1,6 +1,7 @@
 //! The estimate of a weighted particle set: particles binned into the map's cells,
 //! clusters as connected groups of occupied cells, the weighted mode of the dominant
-//! cluster (refined by the weighted mean around it), its spread, and the confidence.
+//! cluster (refined by the weighted mean around it), its spread about that estimate, and
+//! the confidence.
 
 use super::{Config, Lookup};
 
@@ -12,7 +13,8 @@ const CLUSTER_SHARE: f64 = 0.05;
 pub struct Estimate {
     /// Estimated pose value per map axis (m or rad).
     pub pose: Vec<f64>,
-    /// Weighted standard deviation of the dominant cluster per map axis.
+    /// Weighted root-mean-square distance of the dominant cluster from the estimate per map
+    /// axis: the estimate's expected error (about the cluster's mean when the two agree).
     pub std: Vec<f64>,
     /// Weight within the confidence radius of the estimate (0..1).
     pub confidence: f64,
@@ -99,46 +101,39 @@ impl Estimate {
             );
         let index = |cell: usize, a: &super::MapAxis| (cell / a.stride) % a.count;
 
-        // Weighted mean of the particles within one cell of the mode, and the cluster's mean.
+        // Weighted mean of the particles within one cell of the mode.
         let mut near = vec![0.0f64; d];
         let mut near_w = 0.0;
-        let mut mean = vec![0.0f64; d];
-        let mut mean_w = 0.0;
         for &c in &members {
             let close = axes
                 .iter()
                 .all(|a| index(cells[c].0, a).abs_diff(index(cells[mode].0, a)) <= 1);
+            if !close {
+                continue;
+            }
             for &(_, i) in &order[cells[c].2..cells[c].3] {
                 let i = i as usize;
                 for k in 0..d {
-                    let u = f64::from(pos[k * n + i]);
-                    mean[k] += w[i] * u;
-                    if close {
-                        near[k] += w[i] * u;
-                    }
+                    near[k] += w[i] * f64::from(pos[k * n + i]);
                 }
-                mean_w += w[i];
-                if close {
-                    near_w += w[i];
-                }
+                near_w += w[i];
             }
         }
         let est: Vec<f64> = near
             .iter()
             .map(|s| if near_w > 0.0 { s / near_w } else { 0.0 })
             .collect();
-        let mean: Vec<f64> = mean
-            .iter()
-            .map(|s| if mean_w > 0.0 { s / mean_w } else { 0.0 })
-            .collect();
+        // The cluster's mean squared distance from the estimate.
         let mut var = vec![0.0f64; d];
+        let mut cluster_w = 0.0;
         for &c in &members {
             for &(_, i) in &order[cells[c].2..cells[c].3] {
                 let i = i as usize;
                 for k in 0..d {
-                    let e = f64::from(pos[k * n + i]) - mean[k];
+                    let e = f64::from(pos[k * n + i]) - est[k];
                     var[k] += w[i] * e * e;
                 }
+                cluster_w += w[i];
             }
         }
 
@@ -174,7 +169,7 @@ impl Estimate {
             std: axes
                 .iter()
                 .zip(&var)
-                .map(|(a, &v)| (v / mean_w.max(f64::MIN_POSITIVE)).sqrt() * a.step)
+                .map(|(a, &v)| (v / cluster_w.max(f64::MIN_POSITIVE)).sqrt() * a.step)
                 .collect(),
             confidence,
             converged: confidence > cfg.threshold,
