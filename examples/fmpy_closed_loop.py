@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The harness's closed loop (the paper's Algorithm 1) in Python: the generated MuJoCo scene
-through MuJoCo's Python bindings (mujoco==3.17.0) and FtFusion.fmu through FMPy.
+through MuJoCo's Python bindings (mujoco==3.17.0) and FtFusion.fmu through FMPy, with
+contact motions only (the harness's `--slide off`).
 
 It repeats the Rust harness's contact motion step for step (harness/src/sim.rs): reset,
 place part B (mocap body) at the true offset, put the carriage 0.1 mm above part B's top

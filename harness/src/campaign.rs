@@ -91,6 +91,8 @@ pub struct CampaignOptions {
     pub strategy: Strategy,
     /// Gaussian F/T sensor noise ([`Noise::TYPICAL`]) on or off.
     pub sensor_noise: bool,
+    /// Slides under force across the estimate's spread ([`crate::trial::next_motion`]).
+    pub slide: bool,
     /// The FMU (default: [`default_fmu_path`]).
     pub fmu: Option<PathBuf>,
     /// Most contact motions per trial (default: 30 for pf; enough to cover Omega for spiral).
@@ -376,6 +378,10 @@ fn trial_config(
         strategy: options.strategy,
         max_contacts,
         max_sim_time: options.max_sim_time.unwrap_or(0.3 * max_contacts as f64),
+        slide: options
+            .slide
+            .then(|| task.geometry().map(|g| g.clearance()))
+            .transpose()?,
         noise: if options.sensor_noise {
             Noise::TYPICAL
         } else {

@@ -5,9 +5,9 @@
 //! whose position is the true object offset of a trial. Part A hangs under a carriage
 //! with slide joints `x`, `y`, `z` (the task frame's position relative to the nominal goal,
 //! i.e. the TCP): stiff position servos across the approach, a motor along it pressing
-//! with the task's imposed force against a velocity servo, the feed (see `sim`); gravity is off so that the settled contact force is the
-//! imposed force. The F/T sensor (`ft_force`, `ft_torque`) sits on site `ft` of body
-//! `part_a`, at the task's sensor origin.
+//! with the task's imposed force against a velocity servo, the feed (see `sim`); gravity is
+//! off so that the settled contact force is the imposed force. The F/T sensor (`ft_force`,
+//! `ft_torque`) sits on site `ft` of body `part_a`, at the task's sensor origin.
 //!
 //! Collision uses convex pieces only. Part B's top and walls tile the surface exactly
 //! (convex prisms between the hole polygon and a square, boxes outside it, a bottom box):
@@ -16,10 +16,10 @@
 //! each boundary, the outermost touching it, and a hexagonal lattice inside, each sphere
 //! standing for the same area, so that the pressure spreads evenly as in the map's centroid
 //! model. Tiny, so that the face's edge is as sharp as the CAD's: spheres of radius r round
-//! it by r and roll over part B's edges, and MuJoCo then accepts the part up to r farther off
-//! centre than the geometry does (`harness boundary` measures it). The STL meshes are visuals only (contype 0). The MJCF also loads in MuJoCo 2.2.2
-//! (`autolimits`, no `multiccd`, Euler integrator with implicit joint damping across the
-//! approach).
+//! it by r and roll over part B's edges, and MuJoCo then accepts the part up to r farther
+//! off centre than the geometry does (`harness boundary` measures it). The STL meshes are
+//! visuals only (contype 0). The MJCF also loads in MuJoCo 2.2.2 (`autolimits`, no
+//! `multiccd`, Euler integrator with implicit joint damping across the approach).
 
 use std::f64::consts::{PI, TAU};
 use std::fmt::Write as _;

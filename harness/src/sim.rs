@@ -7,8 +7,9 @@
 //! pushes with the imposed force against the feed's damping, a slow guarded approach. When
 //! part A has dropped into part B by [`ENTRY_DEPTH`], the feed drives it down at
 //! [`INSERTION_SPEED`], slowing down over the last [`INSERTION_TIME`] (its speed the height
-//! left over that time), until it settles on the goal under the imposed force. So each contact is a pure function of
-//! the object offset and the commanded point (the FMPy script reproduces it step for step).
+//! left over that time), until it settles on the goal under the imposed force. So each
+//! contact is a pure function of the object offset and the commanded point (the FMPy
+//! script reproduces it step for step).
 //!
 //! Why slow: MuJoCo's contacts are found by penetration after each step. A part arriving
 //! fast sinks into the top face for a step, and where its edge overlaps the top by less
@@ -35,6 +36,10 @@ pub const ENTRY_DEPTH: f64 = 0.0001;
 pub const INSERTION_SPEED: f64 = 0.1;
 /// ... at most the height left over this time (s).
 pub const INSERTION_TIME: f64 = 0.01;
+/// Speed of a slide under force (m/s).
+pub const SLIDE_SPEED: f64 = 0.005;
+/// A slide stops where part A has dropped this far below part B's top (m).
+pub const DROP_DEPTH: f64 = 0.00001;
 /// A contact motion ending with the task frame below this height above the goal has
 /// inserted part A (m).
 pub const SUCCESS_HEIGHT: f64 = 0.001;
@@ -153,6 +158,19 @@ impl Sim {
     /// One contact motion: approach at the commanded task-frame position `xy` (relative to
     /// the nominal goal) with the imposed force until the contact settles.
     pub fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {
+        self.motion(xy, None)
+    }
+
+    /// A slide under force: a contact motion at `from`, then, still pressing, a straight
+    /// move to `to` at [`SLIDE_SPEED`] that stops where part A drops by [`DROP_DEPTH`] (the
+    /// edge found the hole: the carriage holds there and part A goes in), else settles at
+    /// `to`.
+    pub fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact {
+        self.motion(from, Some(to))
+    }
+
+    /// A contact motion at `xy`, then a slide to `slide`, if any.
+    fn motion(&mut self, xy: [f64; 2], mut slide: Option<[f64; 2]>) -> Contact {
         let d = &mut self.data;
         d.reset();
         d.mocap_pos_mut()[self.mocap] = [self.object[0], self.object[1], 0.0];
@@ -169,19 +187,51 @@ impl Sim {
             (MAX_TIME / dt).round() as usize,
             (SETTLE_TIME / dt).round() as usize,
         );
-        let entered = self.spec.top - ENTRY_DEPTH;
+        let (entered, dropped) = (self.spec.top - ENTRY_DEPTH, self.spec.top - DROP_DEPTH);
+        // The slide: its end and length, and when it started (steps), once the press settled.
+        let mut sliding: Option<([f64; 2], f64, usize)> = None;
         let (mut calm, mut steps) = (0, 0);
-        while steps < max_steps && calm < settle_steps {
+        while steps < max_steps {
             d.step();
             steps += 1;
             let z = d.qpos()[self.qpos[2]];
             if z < entered {
                 d.ctrl_mut()[self.actuators[3]] = -INSERTION_SPEED.min(z.max(0.0) / INSERTION_TIME);
             }
+            if let Some((to, len, t0)) = sliding {
+                let done = ((steps - t0) as f64 * dt * SLIDE_SPEED / len).min(1.0);
+                if z < dropped {
+                    // The edge dropped in: hold the carriage where part A is.
+                    let here = [d.qpos()[self.qpos[0]], d.qpos()[self.qpos[1]]];
+                    d.ctrl_mut()[self.actuators[0]] = here[0];
+                    d.ctrl_mut()[self.actuators[1]] = here[1];
+                    sliding = None;
+                } else if done < 1.0 {
+                    for k in 0..2 {
+                        d.ctrl_mut()[self.actuators[k]] = xy[k] + done * (to[k] - xy[k]);
+                    }
+                    calm = 0;
+                    continue;
+                } else {
+                    d.ctrl_mut()[self.actuators[0]] = to[0];
+                    d.ctrl_mut()[self.actuators[1]] = to[1];
+                    sliding = None;
+                }
+            }
             if d.qvel()[self.dof_z].abs() < SETTLE_SPEED && d.ncon() > 0 {
                 calm += 1;
             } else {
                 calm = 0;
+            }
+            if calm >= settle_steps {
+                match slide.take() {
+                    Some(to) if z > entered => {
+                        let len = (to[0] - xy[0]).hypot(to[1] - xy[1]).max(f64::MIN_POSITIVE);
+                        sliding = Some((to, len, steps));
+                        calm = 0;
+                    }
+                    _ => break,
+                }
             }
         }
         let s = d.sensordata();

@@ -1,12 +1,13 @@
 //! One assembly trial: the closed loop of the paper's Algorithm 1 (contact, measure, move
-//! to the estimate, contact again) or the blind spiral search it is compared with. With a
-//! camera (experiment D), an image is taken before the first contact motion (handed to the
-//! FMU alone) and at every contact (handed with the wrench).
+//! to the estimate, contact again; with slides, a slide under force across the estimate's
+//! spread where that spread is a short segment: [`next_motion`]) or the blind spiral search
+//! it is compared with. With a camera (experiment D), an image is taken before the first
+//! contact motion (handed to the FMU alone) and at every contact (handed with the wrench).
 //!
-//! Success: a contact motion inserts the part (it settles with the task frame less than
-//! [`SUCCESS_HEIGHT`](crate::sim::SUCCESS_HEIGHT) above the goal). Every contact motion
-//! counts, the successful one included; a trial ends as a failure after `max_contacts`
-//! motions or `max_sim_time` of simulated time.
+//! Success: a motion inserts the part (it settles with the task frame less than
+//! [`SUCCESS_HEIGHT`](crate::sim::SUCCESS_HEIGHT) above the goal). Every motion, contact or
+//! slide, counts as one contact motion, the successful one included; a trial ends as a
+//! failure after `max_contacts` motions or `max_sim_time` of simulated time.
 
 use std::time::Instant;
 
@@ -46,6 +47,51 @@ pub struct TrialConfig {
     pub spiral_radius: f64,
     /// FMU settings (the seed is set per trial).
     pub settings: Settings,
+    /// Slides under force with the fit's radial clearance (m): [`next_motion`]; `None`,
+    /// contact motions only.
+    pub slide: Option<f64>,
+}
+
+/// The next motion of Algorithm 1 (the paper moves to the estimate and presses).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Motion {
+    /// A contact motion at this point (m).
+    Contact([f64; 2]),
+    /// A slide under force between these points (m).
+    Slide([f64; 2], [f64; 2]),
+}
+
+/// The slide covers the estimate's spread along its line this many times each way.
+pub const SLIDE_SIGMAS: f64 = 2.0;
+/// Error of the direction a contact's torque gives (rad): `harness compare-maps` measures
+/// 1.3° mean, 5° max between the map's and MuJoCo's torque directions.
+pub const DIRECTION_ERROR: f64 = 0.035;
+
+/// The motion after a contact at `tcp` that gave `estimate`: a contact at the estimate; or,
+/// with `slide` (the fit's clearance), a spread along the line from `tcp` to the estimate
+/// wider than the clearance and the line close enough that its direction's error moves it
+/// by at most half the clearance, a slide along that line across the estimate. A
+/// contact near the hole tells the direction of part B well and its distance poorly (the
+/// rim torque's lever hardly changes with the offset), so the posterior is a segment along
+/// that line: contact motions would halve it one by one, a slide under force crosses it in
+/// one motion and drops in where it finds the hole.
+pub fn next_motion(tcp: [f64; 2], estimate: &Estimate, slide: Option<f64>) -> Motion {
+    let e = estimate.object;
+    let (dx, dy) = (e[0] - tcp[0], e[1] - tcp[1]);
+    let dist = dx.hypot(dy);
+    let Some(clearance) = slide.filter(|_| dist > 0.0) else {
+        return Motion::Contact(e);
+    };
+    let u = [dx / dist, dy / dist];
+    let spread = (u[0] * estimate.std[0]).hypot(u[1] * estimate.std[1]);
+    if spread <= clearance || dist * DIRECTION_ERROR > 0.5 * clearance {
+        return Motion::Contact(e);
+    }
+    let half = SLIDE_SIGMAS * spread;
+    Motion::Slide(
+        [e[0] - half * u[0], e[1] - half * u[1]],
+        [e[0] + half * u[0], e[1] + half * u[1]],
+    )
 }
 
 /// One contact motion of a trial.
@@ -138,17 +184,17 @@ pub fn run_trial(
         Strategy::Spiral => spiral(cfg.spiral_step, cfg.spiral_radius),
         Strategy::Pf => Vec::new(),
     };
-    let mut target = [0.0, 0.0];
+    let mut motion = Motion::Contact([0.0, 0.0]);
     let mut steps = Vec::new();
     let mut success = false;
     let mut sim_wall = 0.0;
     let (mut first_look, mut images_missed) = (None, 0);
     if let (Some(e), Some(eye)) = (estimator.as_mut(), eye.as_deref_mut()) {
-        let tcp = [target[0], target[1], eye.look_height()];
+        let tcp = [0.0, 0.0, eye.look_height()];
         match eye.look(offset, tcp, seed)? {
             Some(f) => {
                 let est = e.look(tcp, &f)?;
-                target = est.object;
+                motion = Motion::Contact(est.object);
                 first_look = Some(est);
             }
             None => images_missed += 1,
@@ -157,12 +203,15 @@ pub fn run_trial(
     while steps.len() < cfg.max_contacts && sim.simulated() - sim_start < cfg.max_sim_time {
         if cfg.strategy == Strategy::Spiral {
             match spiral_pts.get(steps.len()) {
-                Some(p) => target = *p,
+                Some(p) => motion = Motion::Contact(*p),
                 None => break,
             }
         }
         let t0 = Instant::now();
-        let c = sim.contact_motion(target);
+        let c = match motion {
+            Motion::Contact(p) => sim.contact_motion(p),
+            Motion::Slide(from, to) => sim.slide_motion(from, to),
+        };
         sim_wall += t0.elapsed().as_secs_f64();
         let wrench = cfg.noise.apply(map_wrench(c.raw), &mut rng);
         if c.inserted {
@@ -186,7 +235,10 @@ pub fn run_trial(
         let estimate = match estimator.as_mut() {
             Some(e) => {
                 let est = e.measure(wrench, c.tcp, image.as_ref())?;
-                target = est.object;
+                // A slide that found no hole told the FMU only where it ended: the next
+                // motion is a contact, so that no two slides sweep the same line.
+                let slide = cfg.slide.filter(|_| matches!(motion, Motion::Contact(_)));
+                motion = next_motion([c.tcp[0], c.tcp[1]], &est, slide);
                 Some(est)
             }
             None => None,
@@ -216,6 +268,39 @@ pub fn run_trial(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn estimate(object: [f64; 2], std: [f64; 2]) -> Estimate {
+        Estimate {
+            object,
+            std,
+            ..Estimate::default()
+        }
+    }
+
+    #[test]
+    fn the_next_motion_slides_across_a_near_spread_along_the_line() {
+        let c = 5e-5;
+        let tcp = [0.001, 0.002];
+        // 0.2 mm away along +x, spread 0.1 mm along x: a slide from 0.2 mm before the
+        // estimate to 0.2 mm beyond, on the line through the TCP.
+        let e = estimate([0.0012, 0.002], [1e-4, 1e-5]);
+        match next_motion(tcp, &e, Some(c)) {
+            Motion::Slide(a, b) => {
+                assert!((a[0] - 0.001).abs() < 1e-12 && (b[0] - 0.0014).abs() < 1e-12);
+                assert!((a[1] - 0.002).abs() < 1e-12 && (b[1] - 0.002).abs() < 1e-12);
+            }
+            m => panic!("{m:?}"),
+        }
+        // Spread within the clearance, slides off, or the line too long for its direction's
+        // error: a contact at the estimate.
+        for (e, slide) in [
+            (estimate([0.0012, 0.002], [4e-5, 1e-5]), Some(c)),
+            (e, None),
+            (estimate([0.003, 0.002], [1e-4, 1e-5]), Some(c)),
+        ] {
+            assert_eq!(next_motion(tcp, &e, slide), Motion::Contact(e.object));
+        }
+    }
 
     #[test]
     fn the_spiral_covers_its_disc_with_the_asked_spacing() {

@@ -20,6 +20,7 @@ fn five_trials_succeed_within(task: &str, map: Option<std::path::PathBuf>, most:
         noise: Noise::TYPICAL,
         spiral_step: 0.0,
         spiral_radius: 0.0,
+        slide: None,
         settings: Settings {
             map,
             ..Settings::default()

@@ -36,6 +36,7 @@ fn campaign(trials: usize, vision: bool) -> Vec<TrialResult> {
         noise: Noise::TYPICAL,
         spiral_step: 0.0,
         spiral_radius: 0.0,
+        slide: None,
         settings: Settings {
             map: Some(map),
             vision: vision_file.clone(),

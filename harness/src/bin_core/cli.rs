@@ -205,6 +205,10 @@ pub struct RunArgs {
     /// Gaussian F/T sensor noise (0.05 N, 2 mN m).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub sensor_noise: Switch,
+    /// Slides under force across the estimate's spread along the line of the last contact
+    /// (pf only).
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub slide: Switch,
     /// The FMU.
     #[arg(long, env = "FTFUSION_FMU")]
     pub fmu: Option<PathBuf>,
@@ -273,6 +277,7 @@ impl RunArgs {
             detector: self.detector.into(),
             strategy: self.strategy.into(),
             sensor_noise: self.sensor_noise == Switch::On,
+            slide: self.slide == Switch::On,
             fmu: self.fmu,
             max_contacts: self.max_contacts,
             max_sim_time: self.max_sim_time,

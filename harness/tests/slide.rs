@@ -1,0 +1,43 @@
+//! The slide under force in MuJoCo: part A pressed on part B, moved along a line, drops in
+//! where the line passes within the fit's clearance of the hole, and not where it passes
+//! farther off.
+
+mod common;
+
+#[test]
+fn a_slide_drops_in_where_it_crosses_the_hole_and_not_beside_it() {
+    let (task, mut sim) = common::peg();
+    let c = task.geometry().expect("a [geometry]").clearance();
+    // Part B 0.2 mm off along +x; slides along x from 0.4 mm before it to 0.4 mm beyond.
+    let hole = [0.0002, 0.0];
+    sim.set_object(hole);
+    for (beside, inserts) in [
+        (0.0, true),
+        (0.5 * c, true),
+        (1.5 * c, false),
+        (3.0 * c, false),
+    ] {
+        let from = [hole[0] - 0.0004, hole[1] + beside];
+        let to = [hole[0] + 0.0004, hole[1] + beside];
+        let m = sim.slide_motion(from, to);
+        assert!(m.settled, "{beside}: {m:?}");
+        assert_eq!(
+            m.inserted, inserts,
+            "a slide {beside} m beside the hole: {m:?}"
+        );
+        if inserts {
+            // It stopped where it dropped in: within the clearance of the hole.
+            let off = (m.tcp[0] - hole[0]).hypot(m.tcp[1] - hole[1]);
+            assert!(off < c, "{beside}: {m:?}");
+        } else {
+            // It ran to its end.
+            assert!((m.tcp[0] - to[0]).abs() < 2e-5, "{beside}: {m:?}");
+        }
+    }
+    // A slide of no length reads what a contact motion reads (it settles twice).
+    let a = sim.slide_motion([0.001, 0.0], [0.001, 0.0]);
+    let b = sim.contact_motion([0.001, 0.0]);
+    for (x, y) in a.raw.iter().zip(&b.raw) {
+        assert!((x - y).abs() < 1e-4, "{a:?} {b:?}");
+    }
+}
