@@ -58,6 +58,10 @@ pub struct Summary {
     pub realtime_factor_overall: f64,
     /// Whether the sensor noise was on.
     pub sensor_noise: bool,
+    /// Slides under force made, of all contact motions.
+    pub slides: usize,
+    /// Trials whose part went in on a slide.
+    pub inserted_by_slide: usize,
 }
 
 impl ContactStats {
@@ -114,6 +118,14 @@ pub fn summarize(
         realtime_factor: sim / sim_wall.max(1e-9),
         realtime_factor_overall: sim / trial_wall.max(1e-9),
         sensor_noise,
+        slides: results
+            .iter()
+            .map(|r| r.steps.iter().filter(|s| s.slide).count())
+            .sum(),
+        inserted_by_slide: results
+            .iter()
+            .filter(|r| r.success && r.steps.last().is_some_and(|s| s.slide))
+            .count(),
     }
 }
 
@@ -127,6 +139,15 @@ impl Summary {
             (
                 "sensor noise",
                 if self.sensor_noise { "on" } else { "off" }.to_owned(),
+            ),
+            (
+                "slides under force",
+                format!(
+                    "{} of {} contact motions, {} of them inserted the part",
+                    self.slides,
+                    (self.contacts.mean * self.trials as f64).round() as usize,
+                    self.inserted_by_slide
+                ),
             ),
             (
                 "camera",

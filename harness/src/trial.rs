@@ -105,6 +105,8 @@ pub struct Step {
     pub estimate: Option<Estimate>,
     /// An image's features went with the wrench.
     pub image: bool,
+    /// The motion was a slide under force.
+    pub slide: bool,
 }
 
 /// What a trial ended with.
@@ -208,6 +210,7 @@ pub fn run_trial(
             }
         }
         let t0 = Instant::now();
+        let slide = matches!(motion, Motion::Slide(..));
         let c = match motion {
             Motion::Contact(p) => sim.contact_motion(p),
             Motion::Slide(from, to) => sim.slide_motion(from, to),
@@ -220,6 +223,7 @@ pub fn run_trial(
                 wrench,
                 estimate: None,
                 image: false,
+                slide,
             });
             success = true;
             break;
@@ -248,6 +252,7 @@ pub fn run_trial(
             wrench,
             estimate,
             image: image.is_some(),
+            slide,
         });
     }
     let last = steps.last().map_or([0.0; 2], |s| [s.tcp[0], s.tcp[1]]);
