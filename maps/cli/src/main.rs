@@ -319,6 +319,10 @@ fn cmd_info(file: &Path) -> Result<()> {
         m.sensor_origin,
         m.pixel * 1e3
     );
+    match m.clearance {
+        Some(c) => println!("clearance  {:.4} mm (radial, from the geometry)", c * 1e3),
+        None => println!("clearance  unknown (no negative contact unless the FMU is given one)"),
+    }
     for s in &m.sources {
         println!("mesh {}     {} sha256 {}", s.role, s.file, s.sha256);
     }

@@ -54,6 +54,8 @@ fn generate_info_export_and_plot_agree_with_each_other() {
         info.contains("object.x") && info.contains("25 cells") && info.contains("Centroid"),
         "{info}"
     );
+    // The fit's clearance, from the task's [geometry] (Ø 10.0 mm hole, Ø 9.9 mm peg).
+    assert!(info.contains("clearance  0.0500 mm"), "{info}");
 
     let csv_path = dir.join("peg.csv");
     ok(&[
