@@ -20,6 +20,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use ftmap::FtMap;
+use ftmap::task::omega::MAX_AXES;
 use rand_distr::Distribution;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
@@ -427,6 +428,7 @@ impl Filter {
             return;
         }
         let per_iteration = (JITTER_SPREAD / (self.cfg.iterations as f64).sqrt()) as f32;
+        let spreads = spreads(&self.pos, &self.lw);
         for (k, a) in self.lookup.axes().iter().enumerate() {
             let top = a.top();
             if top == 0.0 {
@@ -437,7 +439,7 @@ impl Filter {
                 _ => 1.0,
             };
             let values = &mut self.pos[k * n..(k + 1) * n];
-            let scale = s.min(per_iteration * spread(values, &self.lw).max(scale_of_fit));
+            let scale = s.min(per_iteration * spreads[k].max(scale_of_fit));
             noise::jitter(&mut self.rng, values, scale, top);
         }
     }
@@ -459,15 +461,21 @@ struct Evidence {
     vision: Option<Prepared>,
 }
 
-/// Weighted standard deviation of `values` under the normalised log weights `lw`.
-fn spread(values: &[f32], lw: &[f32]) -> f32 {
-    let (mut m, mut m2) = (0.0f64, 0.0f64);
-    for (&v, &l) in values.iter().zip(lw) {
-        let (w, v) = (f64::from(l.exp()), f64::from(v));
-        m += w * v;
-        m2 += w * v * v;
+/// Weighted standard deviation on each axis of the particles `pos` (axis-major) under the
+/// normalised log weights `lw`, in one pass (one exponential per particle).
+fn spreads(pos: &[f32], lw: &[f32]) -> [f32; MAX_AXES] {
+    let n = lw.len();
+    let d = (pos.len() / n.max(1)).min(MAX_AXES);
+    let (mut m, mut m2) = ([0.0f64; MAX_AXES], [0.0f64; MAX_AXES]);
+    for (i, &l) in lw.iter().enumerate() {
+        let w = f64::from(l.exp());
+        for k in 0..d {
+            let v = f64::from(pos[k * n + i]);
+            m[k] += w * v;
+            m2[k] += w * v * v;
+        }
     }
-    (m2 - m * m).max(0.0).sqrt() as f32
+    std::array::from_fn(|k| (m2[k] - m[k] * m[k]).max(0.0).sqrt() as f32)
 }
 
 /// A uniform number in [0, 1).
