@@ -200,6 +200,7 @@ fn main() -> anyhow::Result<()> {
     let matched = Config {
         sigma_force: fnoise,
         sigma_torque: tnoise,
+        mismatch: 0.0,
         ..Config::default()
     };
     for (name, base) in [

@@ -196,6 +196,7 @@ impl Params {
             },
             tail: checked(store, "tail")?,
             clearance: checked(store, "clearance")?,
+            mismatch: checked(store, "mismatch")?,
         };
         let map = store.string(index_of("map")).to_owned();
         if map.trim().is_empty() {

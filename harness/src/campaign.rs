@@ -12,6 +12,8 @@ use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
 use ftmap::Task;
+use ftmap::map::format;
+use ftmap::map::resolution::{Coarse, too_coarse};
 
 use crate::calibration;
 use crate::error::{HarnessError, Result, create_dir};
@@ -105,6 +107,10 @@ pub struct CampaignOptions {
     pub iterations: Option<i32>,
     /// FMU parameter `sigma_torque` (N m).
     pub sigma_torque: Option<f64>,
+    /// FMU parameter `sigma_force` (N).
+    pub sigma_force: Option<f64>,
+    /// FMU parameter `mismatch` (share of the measured force's and torque's magnitudes).
+    pub mismatch: Option<f64>,
 }
 
 /// What setting a campaign up did that its user should hear of, in order.
@@ -120,6 +126,8 @@ pub enum SetupNote {
     },
     /// The camera's vision model, written for the FMU.
     VisionModel(PathBuf),
+    /// The map is too coarse for the fit's clearance.
+    Coarse(Coarse),
 }
 
 impl fmt::Display for SetupNote {
@@ -142,6 +150,7 @@ impl fmt::Display for SetupNote {
                 "vision model {} (camera as MuJoCo places it)",
                 path.display()
             ),
+            Self::Coarse(coarse) => write!(f, "warning: {coarse}"),
         }
     }
 }
@@ -355,7 +364,25 @@ fn resolve_map(
             path: m,
             task: task.name.clone(),
         }),
-        map => Ok(map),
+        map => {
+            // What the FMU will read: the map's own grid and pixel (a file the FMU cannot
+            // read is its to report), or the task's for the embedded map.
+            let coarse = match &map {
+                Some(m) => format::load_any(m)
+                    .map(|(m, _)| too_coarse(m.grid(), m.meta().pixel, m.meta().clearance))
+                    .unwrap_or_default(),
+                None => too_coarse(
+                    &task.grid().map_err(|source| HarnessError::TaskMap {
+                        task: task.name.clone(),
+                        source,
+                    })?,
+                    task.depth.pixel,
+                    task.geometry.as_ref().map(|g| g.clearance()),
+                ),
+            };
+            coarse.into_iter().for_each(|c| note(SetupNote::Coarse(c)));
+            Ok(map)
+        }
     }
 }
 
@@ -394,6 +421,8 @@ fn trial_config(
             particles: options.particles,
             iterations: options.iterations,
             sigma_torque: options.sigma_torque,
+            sigma_force: options.sigma_force,
+            mismatch: options.mismatch,
             sigma_vision: options.sigma_vision,
             vision_method: Some(options.vision_method.parameter()),
             ..Settings::default()

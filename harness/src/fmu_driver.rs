@@ -38,6 +38,8 @@ pub struct Settings {
     pub sigma_torque: Option<f64>,
     /// `sigma_force` (N).
     pub sigma_force: Option<f64>,
+    /// `mismatch` (share of the measured magnitudes).
+    pub mismatch: Option<f64>,
     /// `vision`: an absolute path of a vision model file.
     pub vision: Option<PathBuf>,
     /// `sigma_vision` (px).
@@ -81,6 +83,7 @@ struct Refs {
     particles: u32,
     iterations: u32,
     sigma_torque: u32,
+    mismatch: u32,
     sigma_force: u32,
     vision: u32,
     sigma_vision: u32,
@@ -157,6 +160,7 @@ impl Fmu {
             particles: vr("particles")?,
             iterations: vr("iterations")?,
             sigma_torque: vr("sigma_torque")?,
+            mismatch: vr("mismatch")?,
             sigma_force: vr("sigma_force")?,
             vision: vr("vision")?,
             sigma_vision: vr("sigma_vision")?,
@@ -220,6 +224,7 @@ impl Fmu {
         let reals = [
             (r.sigma_torque, settings.sigma_torque, "sigma_torque"),
             (r.sigma_force, settings.sigma_force, "sigma_force"),
+            (r.mismatch, settings.mismatch, "mismatch"),
             (r.sigma_vision, settings.sigma_vision, "sigma_vision"),
         ];
         for (vr, v, name) in reals {

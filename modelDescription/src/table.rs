@@ -280,7 +280,7 @@ pub const VARIABLES: &[Variable] = &[
         "sigma_torque",
         105,
         Real,
-        Start::Real(0.0075),
+        Start::Real(0.003),
         "N.m",
         [Some(1e-9), Some(1e6)],
         "Standard deviation of a measured torque component",
@@ -352,6 +352,16 @@ pub const VARIABLES: &[Variable] = &[
          of the TCP (maps over object.x, object.y only; it replaces the depth channel there); \
          0: the map's (ftmap writes it from the task's geometry), none if the map has none; \
          negative: off",
+    ),
+    param(
+        "mismatch",
+        113,
+        Real,
+        Start::Real(0.1),
+        "",
+        [Some(0.0), Some(1.0)],
+        "Share of the measured force's and torque's magnitudes that the map may miss (contact \
+         physics it does not model), added to sigma_force and sigma_torque in quadrature",
     ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(

@@ -65,6 +65,8 @@ pub struct Lookup {
     depth_range: [f32; 2],
     approach: [f64; 3],
     clearance: Option<f64>,
+    /// Largest force and torque magnitudes over the map's cells.
+    largest: [f64; 2],
 }
 
 /// Which lookup the likelihood uses.
@@ -106,6 +108,7 @@ impl Lookup {
         let mut cells = Vec::with_capacity(grid.cells());
         let mut depth_seen = false;
         let mut depth_range = [f32::INFINITY, f32::NEG_INFINITY];
+        let mut largest = [0.0f64; 2];
         for i in 0..grid.cells() {
             let c = map.cell(i);
             if let Some(ch) = c.iter().position(|v| !v.is_finite()) {
@@ -115,6 +118,9 @@ impl Lookup {
                 )));
             }
             depth_seen |= c[NCH - 1] != 0.0;
+            for (l, v) in largest.iter_mut().zip([&c[..3], &c[3..6]]) {
+                *l = l.max(f64::from(v.iter().map(|x| x * x).sum::<f32>().sqrt()));
+            }
             depth_range = [
                 depth_range[0].min(c[NCH - 1]),
                 depth_range[1].max(c[NCH - 1]),
@@ -131,6 +137,7 @@ impl Lookup {
             depth_range,
             approach: map.meta().approach,
             clearance: map.meta().clearance,
+            largest,
         };
         for i in 0..lookup.cells.len() {
             if lookup.inserted(f64::from(lookup.cells[i][NCH - 1])) {
@@ -150,6 +157,11 @@ impl Lookup {
     /// Number of axes.
     pub fn ndim(&self) -> usize {
         self.axes.len()
+    }
+
+    /// The largest force (N) and torque (N.m) magnitudes over the map's cells.
+    pub fn largest(&self) -> [f64; 2] {
+        self.largest
     }
 
     /// The fit's radial clearance, when the map's metadata has it (m).

@@ -71,6 +71,9 @@ pub struct Config {
     /// Radial clearance of the negative contact (m): 0, the map's; negative, no negative
     /// contact (module `negative`).
     pub clearance: f64,
+    /// Share of the measured force's and torque's magnitudes the map may miss, added to
+    /// `sigma_force` and `sigma_torque` in quadrature (model mismatch).
+    pub mismatch: f64,
 }
 
 impl Default for Config {
@@ -80,7 +83,7 @@ impl Default for Config {
             seed: 1,
             iterations: 20,
             sigma_force: 1.0,
-            sigma_torque: 0.0075,
+            sigma_torque: 0.003,
             sigma_depth: 0.0005,
             jitter: 0.15,
             confidence_radius: 1e-4,
@@ -88,6 +91,7 @@ impl Default for Config {
             interpolation: Interpolation::Multilinear,
             tail: 4.0,
             clearance: 0.0,
+            mismatch: 0.1,
         }
     }
 }
@@ -295,9 +299,10 @@ impl Filter {
             *dst = src as f32;
         }
         meas[6] = height as f32;
+        let [force, torque] = self.lookup.largest();
         let (vf, vt) = (
-            (1.0 / (c.sigma_force * c.sigma_force)) as f32,
-            (1.0 / (c.sigma_torque * c.sigma_torque)) as f32,
+            inverse_variance(c.sigma_force, c.mismatch, &m.wrench[..3], force),
+            inverse_variance(c.sigma_torque, c.mismatch, &m.wrench[3..], torque),
         );
         let vd = if use_depth {
             (1.0 / (c.sigma_depth * c.sigma_depth)) as f32
@@ -443,6 +448,16 @@ impl Filter {
             noise::jitter(&mut self.rng, values, scale, top);
         }
     }
+}
+
+/// The inverse variance of a wrench component: the sensor's `sigma` and the share
+/// `mismatch` of the measured vector's magnitude (what the map may miss) in quadrature. The
+/// magnitude counts up to the map's `largest`: a wrench beyond anything the map holds is
+/// not excused by its own size.
+fn inverse_variance(sigma: f64, mismatch: f64, measured: &[f64], largest: f64) -> f32 {
+    let magnitude = measured.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let miss = mismatch * magnitude.min(largest);
+    (1.0 / (sigma * sigma + miss * miss)) as f32
 }
 
 /// What one measurement offers the particles, ready for every iteration.

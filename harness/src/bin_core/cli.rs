@@ -227,6 +227,12 @@ pub struct RunArgs {
     /// FMU parameter `sigma_torque` (N m).
     #[arg(long)]
     pub sigma_torque: Option<f64>,
+    /// FMU parameter `sigma_force` (N).
+    #[arg(long)]
+    pub sigma_force: Option<f64>,
+    /// FMU parameter `mismatch` (share of the measured force's and torque's magnitudes).
+    #[arg(long)]
+    pub mismatch: Option<f64>,
 }
 
 impl From<DetectorArg> for Detector {
@@ -284,6 +290,8 @@ impl RunArgs {
             particles: self.particles,
             iterations: self.iterations,
             sigma_torque: self.sigma_torque,
+            sigma_force: self.sigma_force,
+            mismatch: self.mismatch,
         }
     }
 }

@@ -10,6 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ftmap::depth::DepthBackend;
 use ftmap::generate::{GenerateOptions, generate, merge, shard_configs};
 use ftmap::map::format;
+use ftmap::map::resolution::too_coarse;
 use ftmap::{CHANNELS, FtMap, Task, UNITS, WrenchModel};
 
 mod plot;
@@ -263,6 +264,10 @@ fn cmd_generate(
     let task = Task::find(task)?;
     let backend = make_backend(kind, require_gpu)?;
     let grid = task.grid()?;
+    let clearance = task.geometry.as_ref().map(|g| g.clearance());
+    for coarse in too_coarse(&grid, task.depth.pixel, clearance) {
+        eprintln!("warning: {}: {coarse}", task.name);
+    }
     let total = shard_configs(&grid, shard);
     let bar = ProgressBar::new(total as u64).with_style(
         ProgressStyle::with_template(
@@ -322,6 +327,9 @@ fn cmd_info(file: &Path) -> Result<()> {
     match m.clearance {
         Some(c) => println!("clearance  {:.4} mm (radial, from the geometry)", c * 1e3),
         None => println!("clearance  unknown (no negative contact unless the FMU is given one)"),
+    }
+    for coarse in too_coarse(g, m.pixel, m.clearance) {
+        println!("warning    {coarse}");
     }
     for s in &m.sources {
         println!("mesh {}     {} sha256 {}", s.role, s.file, s.sha256);

@@ -317,3 +317,63 @@ fn blend_corrects_a_computed_map_by_a_measured_one() {
     assert!(String::from_utf8_lossy(&refused.stderr).contains("measured"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_grid_too_coarse_for_the_fit_is_warned_of_and_no_other() {
+    let (dir, task) = scratch("coarse");
+    let base = std::fs::read_to_string(&task).unwrap();
+    // The peg's fit: 0.05 mm radial clearance, a diametral gap of 0.1 mm.
+    let variant = |name: &str, edits: &[(&str, &str)]| {
+        let text = edits
+            .iter()
+            .fold(base.clone(), |t, (from, to)| t.replace(from, to));
+        assert!(edits.is_empty() || text != base, "{name}: the edits apply");
+        let path = dir.join(format!("{name}.toml"));
+        std::fs::write(&path, text).unwrap();
+        let map = dir.join(format!("{name}.ftmap"));
+        let out = ftmap(&[
+            "generate",
+            "--task",
+            path.to_str().unwrap(),
+            "--out",
+            map.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{name}");
+        let info = ok(&["info", map.to_str().unwrap()]);
+        (String::from_utf8_lossy(&out.stderr).into_owned(), info)
+    };
+    let rx = [
+        ("object = [\"x\", \"y\"]", "object = [\"x\", \"y\", \"rx\"]"),
+        ("size_rot = 0.0", "size_rot = 0.017453292519943295"),
+    ];
+    // x, y at 0.5 mm: the negative contact states the fit exactly, no warning.
+    let (err, info) = variant("planar", &[]);
+    assert!(
+        !err.contains("warning") && !info.contains("warning"),
+        "{err}{info}"
+    );
+    // With a rotation, a 0.5 mm step hides where the part goes in: warned by both commands.
+    let (err, info) = variant("rotation", &rx);
+    for text in [&err, &info] {
+        assert!(
+            text.contains("object.x's step 0.5000 mm") && text.contains("gap 0.1000 mm"),
+            "{text}"
+        );
+    }
+    // The same at a step equal to the gap: no warning.
+    let fine = [
+        rx[0],
+        rx[1],
+        ("delta_trans = 0.0005", "delta_trans = 0.0001"),
+    ];
+    let (err, info) = variant("rotation_fine", &fine);
+    assert!(
+        !err.contains("warning") && !info.contains("warning"),
+        "{err}{info}"
+    );
+    // A pixel wider than the gap: warned even on x, y alone.
+    let (err, info) = variant("pixel", &[("pixel = 0.0001", "pixel = 0.00025")]);
+    for text in [&err, &info] {
+        assert!(text.contains("the pixel 0.2500 mm"), "{text}");
+    }
+}

@@ -9,6 +9,7 @@ use crate::wrench::WrenchModel;
 
 pub mod blend;
 pub mod format;
+pub mod resolution;
 
 /// Channels stored per cell, in order.
 pub const CHANNELS: [&str; 7] = ["fx", "fy", "fz", "tx", "ty", "tz", "depth"];

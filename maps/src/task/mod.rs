@@ -274,7 +274,11 @@ impl Task {
             geometry,
             camera,
         };
-        task.grid().map_err(|e| err(e.to_string()))?;
+        task.grid().map_err(|e| match e {
+            // Already names this task file.
+            MapError::Task { .. } => e,
+            other => err(other.to_string()),
+        })?;
         Ok(task)
     }
 
