@@ -378,7 +378,7 @@ pub const VARIABLES: &[Variable] = &[
         "sigma_vision",
         151,
         Real,
-        Start::Real(0.15),
+        Start::Real(0.2),
         "px",
         [Some(1e-6), Some(1e6)],
         "Standard deviation of a measured feature distance or edge column",
