@@ -68,30 +68,46 @@ pub const SLIDE_SIGMAS: f64 = 2.0;
 pub const DIRECTION_ERROR: f64 = 0.035;
 
 /// The motion after a contact at `tcp` that gave `estimate`: a contact at the estimate; or,
-/// with `slide` (the fit's clearance), a spread along the line from `tcp` to the estimate
-/// wider than the clearance and the line close enough that its direction's error moves it
-/// by at most half the clearance, a slide along that line across the estimate. A
-/// contact near the hole tells the direction of part B well and its distance poorly (the
-/// rim torque's lever hardly changes with the offset), so the posterior is a segment along
-/// that line: contact motions would halve it one by one, a slide under force crosses it in
-/// one motion and drops in where it finds the hole.
+/// with `slide` (the fit's clearance), a slide under force across the estimate where its
+/// spread is a segment wider than the clearance. A contact near the hole tells the
+/// direction of part B well and its distance poorly (the rim torque's lever hardly changes
+/// with the offset), so the posterior is a segment along the line from `tcp` to the
+/// estimate: used when that line is close enough that its direction's error moves it by at
+/// most half the clearance. A camera sees one axis better than the other, so the posterior
+/// is a segment along the axis it sees least: used when the spread across that axis is
+/// within half the clearance. Contact motions would halve such a segment one by one; a
+/// slide crosses it in one motion and drops in where it finds the hole.
 pub fn next_motion(tcp: [f64; 2], estimate: &Estimate, slide: Option<f64>) -> Motion {
     let e = estimate.object;
-    let (dx, dy) = (e[0] - tcp[0], e[1] - tcp[1]);
-    let dist = dx.hypot(dy);
-    let Some(clearance) = slide.filter(|_| dist > 0.0) else {
+    let Some(clearance) = slide else {
         return Motion::Contact(e);
     };
-    let u = [dx / dist, dy / dist];
-    let spread = (u[0] * estimate.std[0]).hypot(u[1] * estimate.std[1]);
-    if spread <= clearance || dist * DIRECTION_ERROR > 0.5 * clearance {
-        return Motion::Contact(e);
+    let along = |u: [f64; 2]| (u[0] * estimate.std[0]).hypot(u[1] * estimate.std[1]);
+    let (dx, dy) = (e[0] - tcp[0], e[1] - tcp[1]);
+    let dist = dx.hypot(dy);
+    let line = (dist > 0.0 && dist * DIRECTION_ERROR <= 0.5 * clearance)
+        .then(|| [dx / dist, dy / dist])
+        .filter(|&u| along(u) > clearance);
+    let wide = usize::from(estimate.std[1] > estimate.std[0]);
+    let mut axis = [0.0; 2];
+    axis[wide] = 1.0;
+    let segment = if line.is_some() {
+        line
+    } else if estimate.std[wide] > clearance && estimate.std[1 - wide] <= 0.5 * clearance {
+        Some(axis)
+    } else {
+        None
+    };
+    match segment {
+        Some(u) => {
+            let half = SLIDE_SIGMAS * along(u);
+            Motion::Slide(
+                [e[0] - half * u[0], e[1] - half * u[1]],
+                [e[0] + half * u[0], e[1] + half * u[1]],
+            )
+        }
+        None => Motion::Contact(e),
     }
-    let half = SLIDE_SIGMAS * spread;
-    Motion::Slide(
-        [e[0] - half * u[0], e[1] - half * u[1]],
-        [e[0] + half * u[0], e[1] + half * u[1]],
-    )
 }
 
 /// One contact motion of a trial.
@@ -196,7 +212,7 @@ pub fn run_trial(
         match eye.look(offset, tcp, seed)? {
             Some(f) => {
                 let est = e.look(tcp, &f)?;
-                motion = Motion::Contact(est.object);
+                motion = next_motion([tcp[0], tcp[1]], &est, cfg.slide);
                 first_look = Some(est);
             }
             None => images_missed += 1,
@@ -283,7 +299,7 @@ mod tests {
     }
 
     #[test]
-    fn the_next_motion_slides_across_a_near_spread_along_the_line() {
+    fn the_next_motion_slides_across_a_segment_along_the_line_or_an_axis() {
         let c = 5e-5;
         let tcp = [0.001, 0.002];
         // 0.2 mm away along +x, spread 0.1 mm along x: a slide from 0.2 mm before the
@@ -296,12 +312,23 @@ mod tests {
             }
             m => panic!("{m:?}"),
         }
+        // The line too long for its direction's error, but the spread a segment along y (a
+        // camera's view): a slide along y across the estimate.
+        let e = estimate([0.003, 0.002], [1e-5, 1e-4]);
+        match next_motion(tcp, &e, Some(c)) {
+            Motion::Slide(a, b) => {
+                assert!((a[0] - 0.003).abs() < 1e-12 && (b[0] - 0.003).abs() < 1e-12);
+                assert!((a[1] - 0.0018).abs() < 1e-12 && (b[1] - 0.0022).abs() < 1e-12);
+            }
+            m => panic!("{m:?}"),
+        }
         // Spread within the clearance, slides off, or the line too long for its direction's
-        // error: a contact at the estimate.
+        // error and the spread across the wide axis over half the clearance: a contact at
+        // the estimate.
         for (e, slide) in [
             (estimate([0.0012, 0.002], [4e-5, 1e-5]), Some(c)),
             (e, None),
-            (estimate([0.003, 0.002], [1e-4, 1e-5]), Some(c)),
+            (estimate([0.003, 0.002], [1e-4, 3e-5]), Some(c)),
         ] {
             assert_eq!(next_motion(tcp, &e, slide), Motion::Contact(e.object));
         }
