@@ -146,6 +146,8 @@ struct Io {
     wrench: [usize; 6],
     tcp: [usize; 6],
     contact: usize,
+    slide: usize,
+    slide_start: [usize; 2],
     /// vision.left_distance, right_distance, passive_left, passive_right.
     vision: [usize; 4],
     vision_valid: usize,
@@ -169,6 +171,8 @@ impl Io {
             wrench: md::WRENCH.map(index_of),
             tcp: md::TCP.map(index_of),
             contact: index_of(md::CONTACT),
+            slide: index_of(md::SLIDE),
+            slide_start: md::SLIDE_START.map(index_of),
             vision: md::VISION_FEATURES.map(index_of),
             vision_valid: index_of(md::VISION_VALID),
             pose: full(md::GRIP, md::OBJECT),
@@ -537,6 +541,10 @@ impl Instance {
                 passive: [v[2], v[3]],
             }),
             vision_only: image_alone,
+            slide_start: self
+                .store
+                .boolean(self.io.slide)
+                .then(|| self.io.slide_start.map(|i| self.store.real(i))),
         };
         let Some(filter) = self.filter.as_mut() else {
             return Err(FusionError::IllegalCall {

@@ -73,6 +73,8 @@ struct Refs {
     wrench: [u32; 6],
     tcp: [u32; 6],
     contact: u32,
+    slide: u32,
+    slide_start: [u32; 2],
     object: [u32; 2],
     std: [u32; 2],
     reals: [u32; 2],
@@ -150,6 +152,8 @@ impl Fmu {
             wrench: group(md::WRENCH, vr)?,
             tcp: group(md::TCP, vr)?,
             contact: vr(md::CONTACT)?,
+            slide: vr(md::SLIDE)?,
+            slide_start: group(md::SLIDE_START, vr)?,
             object: [vr(md::OBJECT[0])?, vr(md::OBJECT[1])?],
             std: [vr(md::OBJECT_STD[0])?, vr(md::OBJECT_STD[1])?],
             reals: [vr("confidence")?, vr("ess")?],
@@ -264,8 +268,9 @@ impl Estimator {
     }
 
     /// Hands one settled contact to the FMU (wrench in the map's convention, TCP position
-    /// relative to the nominal goal), with an image's features when there are any, and
-    /// returns its new estimate.
+    /// relative to the nominal goal; `slide_start`, where a slide under force that ended in
+    /// it started), with an image's features when there are any, and returns its new
+    /// estimate.
     ///
     /// # Errors
     /// When the FMU refuses an input or the step.
@@ -273,12 +278,19 @@ impl Estimator {
         &mut self,
         wrench: [f64; 6],
         tcp: [f64; 3],
+        slide_start: Option<[f64; 2]>,
         image: Option<&Features>,
     ) -> Result<Estimate> {
         let r = &self.refs;
         self.inst
             .set_real(&r.wrench, &wrench)
             .map_err(fmi_err("set wrench"))?;
+        self.inst
+            .set_real(&r.slide_start, &slide_start.unwrap_or([0.0; 2]))
+            .map_err(fmi_err("set slide_start"))?;
+        self.inst
+            .set_boolean(&[r.slide], &[i32::from(slide_start.is_some())])
+            .map_err(fmi_err("set slide"))?;
         self.pulse(r.contact, tcp, image)
     }
 

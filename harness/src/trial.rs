@@ -254,9 +254,12 @@ pub fn run_trial(
         };
         let estimate = match estimator.as_mut() {
             Some(e) => {
-                let est = e.measure(wrench, c.tcp, image.as_ref())?;
-                // A slide that found no hole told the FMU only where it ended: the next
-                // motion is a contact, so that no two slides sweep the same line.
+                let slide_start = match motion {
+                    Motion::Slide(from, _) => Some(from),
+                    Motion::Contact(_) => None,
+                };
+                let est = e.measure(wrench, c.tcp, slide_start, image.as_ref())?;
+                // After a slide that found no hole the next motion is a contact.
                 let slide = cfg.slide.filter(|_| matches!(motion, Motion::Contact(_)));
                 motion = next_motion([c.tcp[0], c.tcp[1]], &est, slide);
                 Some(est)

@@ -3,15 +3,16 @@
 //! The FMU dispatches its get/set calls through [`VARIABLES`]; the packager writes
 //! [`xml()`]; the FMU, its tests and the harness's FMI driver take the names of the
 //! variables that belong together from the groups ([`WRENCH`], [`TCP`], [`CONTACT`],
-//! [`VISION_FEATURES`], [`VISION_VALID`], [`OBJECT`], [`GRIP`] and their spreads).
+//! [`SLIDE`], [`SLIDE_START`], [`VISION_FEATURES`], [`VISION_VALID`], [`OBJECT`], [`GRIP`]
+//! and their spreads).
 
 mod table;
 mod xml;
 
 pub use table::{
-    CONTACT, Causality, GRIP, GRIP_STD, Initial, OBJECT, OBJECT_STD, Start, TCP, VARIABLES,
-    VISION_FEATURES, VISION_INPUT_VRS, VISION_PARAMETER_VRS, VISION_VALID, VarType, Variability,
-    Variable, WRENCH, by_name, by_vr,
+    CONTACT, Causality, GRIP, GRIP_STD, Initial, OBJECT, OBJECT_STD, SLIDE, SLIDE_START, Start,
+    TCP, VARIABLES, VISION_FEATURES, VISION_INPUT_VRS, VISION_PARAMETER_VRS, VISION_VALID, VarType,
+    Variability, Variable, WRENCH, by_name, by_vr,
 };
 pub use xml::{guid, xml};
 

@@ -111,6 +111,10 @@ pub const WRENCH: [&str; 6] = [
 pub const TCP: [&str; 6] = ["tcp.x", "tcp.y", "tcp.z", "tcp.rx", "tcp.ry", "tcp.rz"];
 /// The input flag whose rising edge takes the wrench as a contact measurement.
 pub const CONTACT: &str = "contact";
+/// The contact ended a slide under force from `SLIDE_START`.
+pub const SLIDE: &str = "slide";
+/// Where a slide under force started (m, task frame relative to the nominal goal).
+pub const SLIDE_START: [&str; 2] = ["slide_start.x", "slide_start.y"];
 /// The vision feature inputs (px): the left and right distances from the active part's
 /// edge to the passive part's, then the passive part's left and right columns.
 pub const VISION_FEATURES: [&str; 4] = [
@@ -469,6 +473,33 @@ pub const VARIABLES: &[Variable] = &[
         max: None,
         description: "The wrench is a settled contact; a measurement is taken on its rising edge",
     },
+    Variable {
+        name: SLIDE,
+        vr: 213,
+        causality: Causality::Input,
+        variability: Variability::Discrete,
+        initial: Initial::Exact,
+        ty: Boolean,
+        start: Start::Boolean(false),
+        unit: "",
+        min: None,
+        max: None,
+        description: "The contact ended a slide under force from slide_start.x, slide_start.y \
+                      that did not go in: the line swept rules out part B within the clearance \
+                      of it, as a contact does of its point",
+    },
+    input(
+        SLIDE_START[0],
+        214,
+        "m",
+        "Where the slide started: x in the frame of tcp.x",
+    ),
+    input(
+        SLIDE_START[1],
+        215,
+        "m",
+        "Where the slide started: y in the frame of tcp.y",
+    ),
     // ---- Vision feature inputs (reserved: VISION_INPUT_VRS, 250..299) -------------------
     input(
         VISION_FEATURES[0],

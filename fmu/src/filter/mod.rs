@@ -107,6 +107,9 @@ pub struct Measurement {
     pub vision: Option<VisionMeasurement>,
     /// No contact: only the image is evaluated (the wrench is ignored).
     pub vision_only: bool,
+    /// The contact ended a slide under force that started here (x, y in m, the frame of
+    /// `tcp`): the swept line is a negative contact too.
+    pub slide_start: Option<[f64; 2]>,
 }
 
 /// What a measurement update did, beyond the new estimate.
@@ -257,10 +260,12 @@ impl Filter {
             .wrench
             .iter()
             .chain(&m.tcp)
+            .chain(m.slide_start.iter().flatten())
             .zip(
                 model_description::WRENCH
                     .iter()
-                    .chain(&model_description::TCP),
+                    .chain(&model_description::TCP)
+                    .chain(&model_description::SLIDE_START),
             )
             .find(|(v, _)| !v.is_finite())
         {
@@ -311,7 +316,10 @@ impl Filter {
         };
         let inv_var = [vf, vf, vf, vt, vt, vt, vd, 0.0];
         let evidence = Evidence {
-            negative: negative.map(|n| (n, [m.tcp[0], m.tcp[1]])),
+            negative: negative.map(|n| {
+                let tcp = [m.tcp[0], m.tcp[1]];
+                (n, m.slide_start.unwrap_or(tcp), tcp)
+            }),
             shift: self.lookup.tcp_shift(&m.tcp),
             meas,
             inv_var,
@@ -356,8 +364,8 @@ impl Filter {
                     *l = -0.5 * (nu + d) * (-2.0 * *l / nu).ln_1p();
                 }
             }
-            if let Some((negative, tcp)) = &ev.negative {
-                negative.add_log_likelihood(&self.pos, self.cfg.particles, *tcp, ll);
+            if let Some((negative, from, to)) = &ev.negative {
+                negative.add_log_likelihood(&self.pos, self.cfg.particles, *from, *to, ll);
             }
         } else {
             ll.fill(0.0);
@@ -462,8 +470,9 @@ fn inverse_variance(sigma: f64, mismatch: f64, measured: &[f64], largest: f64) -
 
 /// What one measurement offers the particles, ready for every iteration.
 struct Evidence {
-    /// The negative contact with the TCP's x, y (m), when the contact did not go in.
-    negative: Option<(NegativeContact, [f64; 2])>,
+    /// The negative contact from the slide's start (or the TCP) to the TCP's x, y (m), when
+    /// the contact did not go in.
+    negative: Option<(NegativeContact, [f64; 2], [f64; 2])>,
     /// TCP shift of each map axis (grid units).
     shift: Vec<f32>,
     /// Measured channels, padded.

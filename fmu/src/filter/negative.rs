@@ -6,6 +6,9 @@
 //! filter is close. This term rules out exactly the disc of particles within the clearance
 //! of the TCP, and on the maps it applies to it replaces the depth channel.
 //!
+//! A slide under force that did not go in says the same of every point it passed: the
+//! term then rules out the particles within the clearance of the swept line.
+//!
 //! It applies to maps over object translations only (`object.x`, `object.y`): with a
 //! rotation error part A may not go in even within the clearance.
 
@@ -43,17 +46,37 @@ impl NegativeContact {
 
     /// Adds [`RULED_OUT`] to the log-likelihood of every particle (grid coordinates in
     /// `pos`, axis-major over `n` particles) whose object offset lies within the clearance
-    /// of the TCP's `xy` (m).
-    pub fn add_log_likelihood(&self, pos: &[f32], n: usize, xy: [f64; 2], ll: &mut [f32]) {
-        // In grid units of each axis, relative to the TCP.
-        let (cx, cy) = (self.x.coord(xy[0]), self.y.coord(xy[1]));
+    /// of the segment from `from` to `to` (the TCP's x, y in m; a point where they are
+    /// equal, a slide's swept line where not).
+    pub fn add_log_likelihood(
+        &self,
+        pos: &[f32],
+        n: usize,
+        from: [f64; 2],
+        to: [f64; 2],
+        ll: &mut [f32],
+    ) {
+        // In clearances, relative to `to`.
         let (sx, sy) = (
             (self.x.step / self.clearance) as f32,
             (self.y.step / self.clearance) as f32,
         );
+        let (cx, cy) = (self.x.coord(to[0]), self.y.coord(to[1]));
+        let (ax, ay) = (
+            (self.x.coord(from[0]) - cx) * sx,
+            (self.y.coord(from[1]) - cy) * sy,
+        );
+        let len2 = ax * ax + ay * ay;
         for ((l, &u), &v) in ll.iter_mut().zip(&pos[..n]).zip(&pos[n..2 * n]) {
             let (dx, dy) = ((u - cx) * sx, (v - cy) * sy);
-            if dx * dx + dy * dy < 1.0 {
+            // The nearest point of the segment, as a share of the way from `to` to `from`.
+            let t = if len2 > 0.0 {
+                ((dx * ax + dy * ay) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let (ex, ey) = (dx - t * ax, dy - t * ay);
+            if ex * ex + ey * ey < 1.0 {
                 *l += RULED_OUT;
             }
         }

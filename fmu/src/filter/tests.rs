@@ -639,6 +639,37 @@ fn a_negative_contact_rules_out_exactly_the_disc_within_the_clearance() {
 }
 
 #[test]
+fn a_slide_that_did_not_go_in_rules_out_the_line_it_swept() {
+    // After the contact at the goal (part B 0.07 mm off along +x), a slide along y from
+    // -0.2 mm to +0.2 mm at x = 0.13 mm that ends in contact: the particles within the
+    // clearance of that line are out, not only those within the clearance of its end; the
+    // truth, 0.06 mm beside the line, keeps its share.
+    let x = 1.3e-4;
+    let slide = |start: Option<[f64; 2]>| {
+        let (mut f, truth) = near_the_hole(0.0);
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+        let mut m = measurement(truth[0], truth[1], [x, 2e-4], 1e-4, &mut rng);
+        m.slide_start = start;
+        f.measure(&m).expect("finite");
+        let c = f.negative_contact().expect("a clearance").clearance;
+        let on_line = weight_within(&f, [x, 0.0], 0.0, 0.999 * c);
+        let near_truth = weight_within(&f, truth, 0.0, 0.2 * c);
+        (on_line, near_truth)
+    };
+    let (swept_on, swept_truth) = slide(Some([x, -2e-4]));
+    let (end_on, end_truth) = slide(None);
+    assert!(swept_on < 1e-9, "on the swept line: {swept_on}");
+    assert!(
+        end_on > 1e-3,
+        "the end alone rules out only its disc: {end_on}"
+    );
+    assert!(
+        swept_truth > end_truth && swept_truth > 1e-3,
+        "near the truth: {swept_truth} swept, {end_truth} end only"
+    );
+}
+
+#[test]
 fn the_jitter_keeps_a_spread_narrower_than_a_grid_step() {
     // Contacts around a truth between the grid's cells: the spread shrinks below the 0.1 mm
     // step, as the fixed jitter (0.15 steps per iteration, 0.067 mm per measurement) would

@@ -409,3 +409,22 @@ fn an_image_without_a_vision_model_is_ignored_with_a_warning() {
     );
     assert_eq!(i.store.integer(index_of("measurements")), 1);
 }
+
+#[test]
+fn a_slide_start_set_with_the_contact_rules_out_the_line_swept() {
+    // The same two contacts, the second ending a slide along y at x = 0.2 mm that passed
+    // 0.1 mm beside part B (0.3 mm off along +x) or a plain contact there: the inputs
+    // `slide` and `slide_start.*` reach the filter and change what it concludes.
+    let truth = [3e-4, 0.0];
+    let run = |slide: bool| {
+        let (mut i, _) = initialized();
+        contact(&mut i, 0.0, truth, [0.0, 0.0]);
+        set_bool(&mut i, "slide", slide);
+        set_reals(&mut i, &["slide_start.x", "slide_start.y"], &[2e-4, -3e-4]).expect("inputs");
+        assert_eq!(contact(&mut i, 1.0, truth, [2e-4, 3e-4]), Status::Ok);
+        [real(&i, "object.x"), real(&i, "object.y")]
+    };
+    let (swept, end) = (run(true), run(false));
+    assert!(swept.iter().chain(&end).all(|v| v.is_finite()));
+    assert_ne!(swept, end, "the line swept changes the estimate");
+}
