@@ -91,13 +91,10 @@ pub fn next_motion(tcp: [f64; 2], estimate: &Estimate, slide: Option<f64>) -> Mo
     let wide = usize::from(estimate.std[1] > estimate.std[0]);
     let mut axis = [0.0; 2];
     axis[wide] = 1.0;
-    let segment = if line.is_some() {
-        line
-    } else if estimate.std[wide] > clearance && estimate.std[1 - wide] <= 0.5 * clearance {
-        Some(axis)
-    } else {
-        None
-    };
+    let segment = line.or_else(|| {
+        (estimate.std[wide] > clearance && estimate.std[1 - wide] <= 0.5 * clearance)
+            .then_some(axis)
+    });
     match segment {
         Some(u) => {
             let half = SLIDE_SIGMAS * along(u);
@@ -259,7 +256,8 @@ pub fn run_trial(
                     Motion::Contact(_) => None,
                 };
                 let est = e.measure(wrench, c.tcp, slide_start, image.as_ref())?;
-                // After a slide that found no hole the next motion is a contact.
+                // After a slide that found no hole the next motion is a contact (the
+                // campaigns' figures are measured so; slides in a row are untried).
                 let slide = cfg.slide.filter(|_| matches!(motion, Motion::Contact(_)));
                 motion = next_motion([c.tcp[0], c.tcp[1]], &est, slide);
                 Some(est)
