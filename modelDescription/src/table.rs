@@ -186,6 +186,23 @@ const fn param(
     }
 }
 
+/// A Boolean input that is false until the importer raises it (a discrete event).
+const fn flag(name: &'static str, vr: u32, description: &'static str) -> Variable {
+    Variable {
+        name,
+        vr,
+        causality: Causality::Input,
+        variability: Variability::Discrete,
+        initial: Initial::Exact,
+        ty: Boolean,
+        start: Start::Boolean(false),
+        unit: "",
+        min: None,
+        max: None,
+        description,
+    }
+}
+
 const fn input(
     name: &'static str,
     vr: u32,
@@ -460,34 +477,18 @@ pub const VARIABLES: &[Variable] = &[
         "rad",
         "Task frame relative to the nominal goal frame: rotation-vector z",
     ),
-    Variable {
-        name: CONTACT,
-        vr: 212,
-        causality: Causality::Input,
-        variability: Variability::Discrete,
-        initial: Initial::Exact,
-        ty: Boolean,
-        start: Start::Boolean(false),
-        unit: "",
-        min: None,
-        max: None,
-        description: "The wrench is a settled contact; a measurement is taken on its rising edge",
-    },
-    Variable {
-        name: SLIDE,
-        vr: 213,
-        causality: Causality::Input,
-        variability: Variability::Discrete,
-        initial: Initial::Exact,
-        ty: Boolean,
-        start: Start::Boolean(false),
-        unit: "",
-        min: None,
-        max: None,
-        description: "The contact ended a slide under force from slide_start.x, slide_start.y \
-                      that did not go in: the line swept rules out part B within the clearance \
-                      of it, as a contact does of its point",
-    },
+    flag(
+        CONTACT,
+        212,
+        "The wrench is a settled contact; a measurement is taken on its rising edge",
+    ),
+    flag(
+        SLIDE,
+        213,
+        "The contact ended a slide under force from slide_start.x, slide_start.y \
+         that did not go in: the line swept rules out part B within the clearance \
+         of it, as a contact does of its point",
+    ),
     input(
         SLIDE_START[0],
         214,
@@ -526,20 +527,12 @@ pub const VARIABLES: &[Variable] = &[
         "px",
         "Detected column (u) of the passive part's right edge at the centre row (vision_method 1)",
     ),
-    Variable {
-        name: VISION_VALID,
-        vr: 254,
-        causality: Causality::Input,
-        variability: Variability::Discrete,
-        initial: Initial::Exact,
-        ty: Boolean,
-        start: Start::Boolean(false),
-        unit: "",
-        min: None,
-        max: None,
-        description: "The vision inputs hold a detection: used by the next contact measurement, \
-                      or alone on its rising edge while contact is false",
-    },
+    flag(
+        VISION_VALID,
+        254,
+        "The vision inputs hold a detection: used by the next contact measurement, \
+         or alone on its rising edge while contact is false",
+    ),
     // ---- Outputs (3xx) ------------------------------------------------------------------
     output(
         OBJECT[0],
