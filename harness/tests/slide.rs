@@ -1,8 +1,12 @@
 //! The slide under force in MuJoCo: part A pressed on part B, moved along a line, drops in
 //! where the line passes within the fit's clearance of the hole, and not where it passes
-//! farther off.
+//! farther off, on every committed scene.
 
 mod common;
+
+use ftmap::Task;
+use harness::scene::{SceneSpec, scene_path};
+use harness::sim::Sim;
 
 #[test]
 fn a_slide_drops_in_where_it_crosses_the_hole_and_not_beside_it() {
@@ -39,5 +43,35 @@ fn a_slide_drops_in_where_it_crosses_the_hole_and_not_beside_it() {
     let b = sim.contact_motion([0.001, 0.0]);
     for (x, y) in a.raw.iter().zip(&b.raw) {
         assert!((x - y).abs() < 1e-4, "{a:?} {b:?}");
+    }
+}
+
+#[test]
+fn on_every_scene_a_slide_drops_in_within_the_clearance_and_not_beyond() {
+    // The FMU rules out part B within the fit's clearance of a slide's line that did not go
+    // in (inputs `slide`, `slide_start.*`): a slide passing 0.9 clearances beside the hole
+    // must drop in on every committed scene, one 1.5 clearances beside it must not.
+    for name in [
+        "peg_in_hole",
+        "tight_peg",
+        "octagon",
+        "gear",
+        "bearing_housing",
+    ] {
+        let task = Task::find(name).expect("a committed task");
+        let spec = SceneSpec::of_task(&task).expect("its scene description");
+        let mut sim = Sim::load(&scene_path(&task), spec).expect("its committed scene");
+        let c = task.geometry().expect("a [geometry]").clearance();
+        let hole = [0.0002, 0.0];
+        sim.set_object(hole);
+        for (beside, inserts) in [(0.9 * c, true), (1.5 * c, false)] {
+            let from = [hole[0] - 0.0004, hole[1] + beside];
+            let to = [hole[0] + 0.0004, hole[1] + beside];
+            let m = sim.slide_motion(from, to);
+            assert_eq!(
+                m.inserted, inserts,
+                "{name}: a slide {beside} m beside the hole: {m:?}"
+            );
+        }
     }
 }
