@@ -256,8 +256,8 @@ pub fn run_trial(
                     Motion::Contact(_) => None,
                 };
                 let est = e.measure(wrench, c.tcp, slide_start, image.as_ref())?;
-                // After a slide that found no hole the next motion is a contact (the
-                // campaigns' figures are measured so; slides in a row are untried).
+                // After a slide that found no hole the next motion is a contact: slides in a
+                // row, each ruling out its line, run into long tails (docs/RESULTS.md).
                 let slide = cfg.slide.filter(|_| matches!(motion, Motion::Contact(_)));
                 motion = next_motion([c.tcp[0], c.tcp[1]], &est, slide);
                 Some(est)
