@@ -4,10 +4,6 @@
 
 mod common;
 
-use ftmap::Task;
-use harness::scene::{SceneSpec, scene_path};
-use harness::sim::Sim;
-
 #[test]
 fn a_slide_drops_in_where_it_crosses_the_hole_and_not_beside_it() {
     let (task, mut sim) = common::peg();
@@ -58,9 +54,7 @@ fn on_every_scene_a_slide_drops_in_within_the_clearance_and_not_beyond() {
         "gear",
         "bearing_housing",
     ] {
-        let task = Task::find(name).expect("a committed task");
-        let spec = SceneSpec::of_task(&task).expect("its scene description");
-        let mut sim = Sim::load(&scene_path(&task), spec).expect("its committed scene");
+        let (task, mut sim) = common::scene(name);
         let c = task.geometry().expect("a [geometry]").clearance();
         let hole = [0.0002, 0.0];
         sim.set_object(hole);

@@ -14,7 +14,12 @@ use harness::vision::features::task_model;
 
 /// The peg_in_hole task and a simulation of its committed scene.
 pub fn peg() -> (Task, Sim) {
-    let task = Task::find("peg_in_hole").expect("task peg_in_hole");
+    scene("peg_in_hole")
+}
+
+/// A committed task and a simulation of its committed scene.
+pub fn scene(name: &str) -> (Task, Sim) {
+    let task = Task::find(name).expect("a committed task");
     let spec = SceneSpec::of_task(&task).expect("its scene description");
     let sim = Sim::load(&scene_path(&task), spec).expect("its committed scene");
     (task, sim)
