@@ -35,6 +35,12 @@ pub enum Geometry {
         block: [f64; 3],
         /// Vertices per circle.
         segments: u32,
+        /// 45-degree chamfer on the peg's tip edge, its leg (m); 0: a sharp edge.
+        #[serde(default)]
+        peg_chamfer: f64,
+        /// 45-degree chamfer on the hole's top edge, its leg (m); 0: a sharp edge.
+        #[serde(default)]
+        hole_chamfer: f64,
     },
     /// An octagonal peg (A, `peg.stl`) into a blind octagonal hole (B, `block.stl`), flats
     /// facing +-x and +-y.
@@ -49,6 +55,12 @@ pub enum Geometry {
         hole_depth: f64,
         /// Block size x, y, z (m), centred on the hole's axis.
         block: [f64; 3],
+        /// 45-degree chamfer on the peg's tip edges, its leg (m); 0: sharp edges.
+        #[serde(default)]
+        peg_chamfer: f64,
+        /// 45-degree chamfer on the hole's top edges, its leg (m); 0: sharp edges.
+        #[serde(default)]
+        hole_chamfer: f64,
     },
     /// A spur gear wheel with a bore (A, `gear.stl`) onto a shaft standing on a round base
     /// (B, `shaft.stl`); the teeth are trapezoids, the first centred on +x.
@@ -135,6 +147,17 @@ impl Geometry {
                 Err(format!("{a} = {va} must be less than {b} = {vb}"))
             }
         };
+        let chamfers = |peg: f64, hole: f64| {
+            [("peg_chamfer", peg), ("hole_chamfer", hole)]
+                .iter()
+                .try_for_each(|&(name, v)| {
+                    if v >= 0.0 && v.is_finite() {
+                        Ok(())
+                    } else {
+                        Err(format!("{name} = {v} must be >= 0"))
+                    }
+                })
+        };
         let circles = |n: u32| {
             if n >= 8 && n.is_multiple_of(4) {
                 Ok(())
@@ -150,6 +173,8 @@ impl Geometry {
                 hole_depth,
                 block,
                 segments,
+                peg_chamfer,
+                hole_chamfer,
             } => {
                 positive(&[
                     ("peg_radius", peg_radius),
@@ -161,15 +186,19 @@ impl Geometry {
                     ("block y", block[1]),
                     ("block z", block[2]),
                 ])?;
+                chamfers(peg_chamfer, hole_chamfer)?;
                 less(("peg_radius", peg_radius), ("hole_radius", hole_radius))?;
                 less(
-                    ("hole_radius", hole_radius),
+                    ("hole_radius + hole_chamfer", hole_radius + hole_chamfer),
                     (
                         "half the block's smaller side",
                         block[0].min(block[1]) / 2.0,
                     ),
                 )?;
                 less(("hole_depth", hole_depth), ("block z", block[2]))?;
+                less(("peg_chamfer", peg_chamfer), ("peg_radius", peg_radius))?;
+                less(("peg_chamfer", peg_chamfer), ("peg_length", peg_length))?;
+                less(("hole_chamfer", hole_chamfer), ("hole_depth", hole_depth))?;
                 circles(segments)
             }
             Self::OctagonPeg {
@@ -178,6 +207,8 @@ impl Geometry {
                 peg_length,
                 hole_depth,
                 block,
+                peg_chamfer,
+                hole_chamfer,
             } => {
                 positive(&[
                     ("peg_across_flats", peg_across_flats),
@@ -189,19 +220,26 @@ impl Geometry {
                     ("block y", block[1]),
                     ("block z", block[2]),
                 ])?;
+                chamfers(peg_chamfer, hole_chamfer)?;
                 less(
                     ("peg_across_flats", peg_across_flats),
                     ("hole_across_flats", hole_across_flats),
                 )?;
-                let corner = hole_across_flats / 2.0 / (PI / 8.0).cos();
+                let corner = (hole_across_flats / 2.0 + hole_chamfer) / (PI / 8.0).cos();
                 less(
-                    ("the hole's corner radius", corner),
+                    ("the chamfered hole's corner radius", corner),
                     (
                         "half the block's smaller side",
                         block[0].min(block[1]) / 2.0,
                     ),
                 )?;
-                less(("hole_depth", hole_depth), ("block z", block[2]))
+                less(("hole_depth", hole_depth), ("block z", block[2]))?;
+                less(
+                    ("peg_chamfer", peg_chamfer),
+                    ("half peg_across_flats", peg_across_flats / 2.0),
+                )?;
+                less(("peg_chamfer", peg_chamfer), ("peg_length", peg_length))?;
+                less(("hole_chamfer", hole_chamfer), ("hole_depth", hole_depth))
             }
             Self::GearOnShaft {
                 teeth,
@@ -314,6 +352,31 @@ impl Geometry {
     pub fn clearance(&self) -> f64 {
         self.insertion_limit(0.0)
     }
+
+    /// The sum of the 45-degree chamfers' legs on part A's tip and part B's mouth (m).
+    pub fn chamfers(&self) -> f64 {
+        match *self {
+            Self::RoundPeg {
+                peg_chamfer,
+                hole_chamfer,
+                ..
+            }
+            | Self::OctagonPeg {
+                peg_chamfer,
+                hole_chamfer,
+                ..
+            } => peg_chamfer + hole_chamfer,
+            Self::GearOnShaft { .. } | Self::BearingHousing { .. } => 0.0,
+        }
+    }
+
+    /// How far part B may sit off centre along `theta` (rad) with part A's tip still landing
+    /// on a chamfer or in the hole (m): the insertion limit widened by the chamfers (on the
+    /// octagon, along theta, by their legs over the cosine to the nearest flat normal).
+    /// Whether the part then slides in depends on friction and on how far the robot yields.
+    pub fn chamfer_reach(&self, theta: f64) -> f64 {
+        self.insertion_limit(theta) * (1.0 + self.chamfers() / self.clearance())
+    }
 }
 
 /// Builds the two parts of a task.
@@ -331,17 +394,29 @@ pub fn meshes(g: &Geometry) -> Vec<NamedMesh> {
             hole_depth,
             block,
             segments,
+            peg_chamfer,
+            hole_chamfer,
         } => {
             let (peg, hole) = (
                 polygon(peg_radius, segments, 0.0),
                 polygon(hole_radius, segments, 0.0),
             );
             vec![
-                named("peg.stl", Role::A, prism(&peg, None, 0.0, peg_length)),
+                named(
+                    "peg.stl",
+                    Role::A,
+                    tipped(&peg, peg_radius, peg_chamfer, peg_length),
+                ),
                 named(
                     "block.stl",
                     Role::B,
-                    pocket(&rect(block), &hole, hole_depth - block[2], 0.0, hole_depth),
+                    pocket(
+                        &rect(block),
+                        &hole,
+                        hole_radius,
+                        hole_chamfer,
+                        [hole_depth - block[2], 0.0, hole_depth],
+                    ),
                 ),
             ]
         }
@@ -351,13 +426,20 @@ pub fn meshes(g: &Geometry) -> Vec<NamedMesh> {
             peg_length,
             hole_depth,
             block,
+            peg_chamfer,
+            hole_chamfer,
         } => {
             let octagon = |across: f64| polygon(across / 2.0 / (PI / 8.0).cos(), 8, PI / 8.0);
             vec![
                 named(
                     "peg.stl",
                     Role::A,
-                    prism(&octagon(peg_across_flats), None, 0.0, peg_length),
+                    tipped(
+                        &octagon(peg_across_flats),
+                        peg_across_flats / 2.0,
+                        peg_chamfer,
+                        peg_length,
+                    ),
                 ),
                 named(
                     "block.stl",
@@ -365,9 +447,9 @@ pub fn meshes(g: &Geometry) -> Vec<NamedMesh> {
                     pocket(
                         &rect(block),
                         &octagon(hole_across_flats),
-                        hole_depth - block[2],
-                        0.0,
-                        hole_depth,
+                        hole_across_flats / 2.0,
+                        hole_chamfer,
+                        [hole_depth - block[2], 0.0, hole_depth],
                     ),
                 ),
             ]
@@ -530,11 +612,37 @@ fn push(out: &mut Vec<Tri>, [a, b, c]: Tri, keep: bool) {
 
 /// Side band of a loop from z0 up to z1, facing away from the axis (`outward`) or toward it.
 fn wall(out: &mut Vec<Tri>, l: &[[f64; 2]], z0: f64, z1: f64, outward: bool) {
-    for (j, &p) in l.iter().enumerate() {
-        let q = l[(j + 1) % l.len()];
-        push(out, [at(p, z0), at(q, z0), at(q, z1)], outward);
-        push(out, [at(p, z0), at(q, z1), at(p, z1)], outward);
+    frustum(out, l, l, z0, z1, outward);
+}
+
+/// Side band from loop `lower` at z0 up to loop `upper` at z1, the two sampled on the same
+/// rays, facing away from the axis (`outward`) or toward it.
+fn frustum(
+    out: &mut Vec<Tri>,
+    lower: &[[f64; 2]],
+    upper: &[[f64; 2]],
+    z0: f64,
+    z1: f64,
+    outward: bool,
+) {
+    for j in 0..lower.len() {
+        let k = (j + 1) % lower.len();
+        let [p0, q0, q1, p1] = [
+            at(lower[j], z0),
+            at(lower[k], z0),
+            at(upper[k], z1),
+            at(upper[j], z1),
+        ];
+        push(out, [p0, q0, q1], outward);
+        push(out, [p0, q1, p1], outward);
     }
+}
+
+/// A regular loop of apothem (or radius) `apothem` moved `by` outwards (negative: inwards)
+/// at every side: scaled about the axis, its vertices stay on their rays.
+fn offset_loop(l: &[[f64; 2]], apothem: f64, by: f64) -> Vec<[f64; 2]> {
+    let s = (apothem + by) / apothem;
+    l.iter().map(|p| [p[0] * s, p[1] * s]).collect()
 }
 
 /// The face inside a loop at height z, fanned from the axis, facing +z (`up`) or -z.
@@ -636,15 +744,47 @@ fn boss(lower: &[[f64; 2]], upper: &[[f64; 2]], z0: f64, z1: f64, z2: f64) -> Ve
     out
 }
 
-/// A prism of `outer` from z0 to z2 with a blind hole `hole` from its top down to z1.
-fn pocket(outer: &[[f64; 2]], hole: &[[f64; 2]], z0: f64, z1: f64, z2: f64) -> Vec<Tri> {
-    let (o, i) = matched(outer, hole);
+/// A peg: a prism of the regular loop `l` (apothem or radius `apothem`) from its tip at
+/// z = 0 up to `length`, the tip's edge cut by a 45-degree chamfer of leg `chamfer`.
+fn tipped(l: &[[f64; 2]], apothem: f64, chamfer: f64, length: f64) -> Vec<Tri> {
+    if chamfer == 0.0 {
+        return prism(l, None, 0.0, length);
+    }
+    let tip = offset_loop(l, apothem, -chamfer);
+    let mut out = Vec::new();
+    disk(&mut out, &tip, 0.0, false);
+    frustum(&mut out, &tip, l, 0.0, chamfer, true);
+    wall(&mut out, l, chamfer, length, true);
+    disk(&mut out, l, length, true);
+    out
+}
+
+/// A prism of `outer` from z0 to z2 with a blind hole from its top down to z1 (`[z0, z1,
+/// z2]`): the regular loop `hole` (apothem or radius `apothem`), its top edge cut by a
+/// 45-degree chamfer of leg `chamfer`.
+fn pocket(
+    outer: &[[f64; 2]],
+    hole: &[[f64; 2]],
+    apothem: f64,
+    chamfer: f64,
+    z: [f64; 3],
+) -> Vec<Tri> {
+    let [z0, z1, z2] = z;
+    let (o, mouth) = matched(outer, &offset_loop(hole, apothem, chamfer));
     let mut out = Vec::new();
     wall(&mut out, &o, z0, z2, true);
     disk(&mut out, &o, z0, false);
-    annulus(&mut out, &o, &i, z2, true);
-    wall(&mut out, &i, z1, z2, false);
-    disk(&mut out, &i, z1, true);
+    annulus(&mut out, &o, &mouth, z2, true);
+    if chamfer > 0.0 {
+        // The mouth resampled on the outer loop's rays too: the hole on the same rays.
+        let bore = offset_loop(&mouth, apothem + chamfer, -chamfer);
+        frustum(&mut out, &bore, &mouth, z2 - chamfer, z2, false);
+        wall(&mut out, &bore, z1, z2 - chamfer, false);
+        disk(&mut out, &bore, z1, true);
+    } else {
+        wall(&mut out, &mouth, z1, z2, false);
+        disk(&mut out, &mouth, z1, true);
+    }
     out
 }
 
@@ -862,6 +1002,112 @@ mod tests {
                 mm3 * 1e-9
             );
         }
+    }
+
+    /// A task's geometry with chamfers of legs `peg` and `hole` (mm).
+    fn chamfered(task: &str, peg: f64, hole: f64) -> Geometry {
+        let mut g = geometry(task);
+        match &mut g {
+            Geometry::RoundPeg {
+                peg_chamfer,
+                hole_chamfer,
+                ..
+            }
+            | Geometry::OctagonPeg {
+                peg_chamfer,
+                hole_chamfer,
+                ..
+            } => (*peg_chamfer, *hole_chamfer) = (peg * MM, hole * MM),
+            _ => panic!("{task} has no chamfers"),
+        }
+        g.check().expect("the chamfered parts exist");
+        g
+    }
+
+    #[test]
+    fn chamfered_parts_are_closed_and_hold_the_frustums_volume() {
+        // A frustum of a loop scaled by s0 at one end and s1 at the other, height h: the
+        // loop's area times h (s0^2 + s0 s1 + s1^2) / 3.
+        let frustum =
+            |area: f64, s0: f64, s1: f64, h: f64| area * h * (s0 * s0 + s0 * s1 + s1 * s1) / 3.0;
+        let octagon = |w: f64| 2.0 * (2f64.sqrt() - 1.0) * w * w;
+        let (pc, hc) = (0.5, 0.8);
+        let cases = [
+            ("peg_in_hole", ngon(4.95, 256), 4.95, ngon(5.0, 256), 5.0),
+            ("octagon", octagon(10.0), 5.0, octagon(10.05), 5.025),
+        ];
+        for (task, peg_area, peg_apothem, hole_area, hole_apothem) in cases {
+            let parts = meshes(&chamfered(task, pc, hc));
+            let tris = |i: usize| -> Vec<Tri> {
+                parts[i]
+                    .triangles
+                    .iter()
+                    .map(|t| t.map(|v| v.map(f64::from)))
+                    .collect()
+            };
+            let (peg, block) = (tris(0), tris(1));
+            for (file, t) in [("peg", &peg), ("block", &block)] {
+                watertight(t).unwrap_or_else(|e| panic!("{task}/{file}: not watertight: {e}"));
+                no_folds(t).unwrap_or_else(|e| panic!("{task}/{file}: {e}"));
+            }
+            let peg_mm3 = peg_area * (40.0 - pc)
+                + frustum(peg_area, (peg_apothem - pc) / peg_apothem, 1.0, pc);
+            let hole_mm3 = hole_area * (10.0 - hc)
+                + frustum(hole_area, 1.0, (hole_apothem + hc) / hole_apothem, hc);
+            let block_mm3 = 40.0 * 40.0 * 20.0 - hole_mm3;
+            for (file, got, mm3) in [
+                ("peg", volume(&peg), peg_mm3),
+                ("block", volume(&block), block_mm3),
+            ] {
+                assert!(
+                    close(got, mm3 * 1e-9, 1e-6),
+                    "{task}/{file}: volume {got:e} m^3, analytic {:e}",
+                    mm3 * 1e-9
+                );
+            }
+            // The tip's face is the outline moved in by the chamfer; the mouth moved out.
+            // Vertices at height z within 8 mm of the axis (not the block's outline): the
+            // largest |x| or |y|, the apothem of both shapes (a vertex at angle 0 or pi / 8).
+            let widest = |t: &[Tri], z: f64| {
+                vertices(t)
+                    .iter()
+                    .filter(|v| (v[2] - z).abs() < EPS && v[0].hypot(v[1]) < 8.0 * MM)
+                    .map(|v| v[0].abs().max(v[1].abs()))
+                    .fold(0.0, f64::max)
+            };
+            let cases = [
+                (widest(&peg, 0.0), peg_apothem - pc),
+                (widest(&peg, pc * MM), peg_apothem),
+                (widest(&block, 10.0 * MM), hole_apothem + hc),
+                (widest(&block, (10.0 - hc) * MM), hole_apothem),
+            ];
+            for (got, mm) in cases {
+                assert!(
+                    (got - mm * MM).abs() < 1e-7,
+                    "{task}: {got} m, want {mm} mm"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn chamfers_must_fit_the_parts() {
+        let mut g = chamfered("peg_in_hole", 0.0, 0.0);
+        if let Geometry::RoundPeg { peg_chamfer, .. } = &mut g {
+            *peg_chamfer = 5.0 * MM;
+        }
+        let e = g.check().expect_err("a chamfer wider than the peg");
+        assert!(e.contains("peg_chamfer"), "{e}");
+        if let Geometry::RoundPeg {
+            peg_chamfer,
+            hole_chamfer,
+            ..
+        } = &mut g
+        {
+            (*peg_chamfer, *hole_chamfer) = (0.0, -1e-4);
+        }
+        let e = g.check().expect_err("a negative chamfer");
+        assert!(e.contains("hole_chamfer = -0.0001 must be >= 0"), "{e}");
     }
 
     #[test]
