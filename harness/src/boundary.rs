@@ -9,12 +9,14 @@ use std::fmt;
 use ftmap::Task;
 
 use crate::error::{HarnessError, Result};
+use crate::scene::SERVO_KP;
 use crate::sim::Sim;
 
 /// The bisection stops when the bracket is this narrow (m).
 pub const RESOLUTION: f64 = 1.0e-6;
-/// The outer end of the bracket, in insertion limits: part A must not go in that far off.
-const OUTER: f64 = 4.0;
+/// The outer end of the bracket, in insertion limits beyond the chamfers' reach: part A
+/// must not go in that far off.
+const OUTER: f64 = 3.0;
 
 /// The insertion boundary along one direction.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -23,6 +25,8 @@ pub struct Boundary {
     pub theta: f64,
     /// The geometry's insertion limit (m).
     pub geometric: f64,
+    /// How far off part A's tip still lands on a chamfer (m; the insertion limit without).
+    pub chamfer_reach: f64,
     /// The largest offset at which part A went in (m, to [`RESOLUTION`]).
     pub measured: f64,
 }
@@ -56,19 +60,37 @@ impl Boundaries {
 impl fmt::Display for Boundaries {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "insertion boundary of {} (mm)", self.task)?;
-        writeln!(f, "direction  geometry  MuJoCo  difference")?;
+        writeln!(
+            f,
+            "direction  geometry  chamfers' reach  MuJoCo  difference"
+        )?;
         for b in &self.directions {
             writeln!(
                 f,
-                "{:>8.1}°  {:>8.4}  {:>6.4}  {:>+10.4}",
+                "{:>8.1}°  {:>8.4}  {:>15.4}  {:>6.4}  {:>+10.4}",
                 b.theta.to_degrees(),
                 b.geometric * 1e3,
+                b.chamfer_reach * 1e3,
                 b.measured * 1e3,
                 b.excess() * 1e3
             )?;
         }
         writeln!(f, "worst difference {:.4} mm", self.worst() * 1e3)
     }
+}
+
+/// How far the x/y servos give way while part A slides down a 45-degree chamfer pressed with
+/// the task's force against friction mu: F (1 - mu) / (1 + mu) over their stiffness (m); 0
+/// without chamfers. Part A goes in this much farther off than the fit allows.
+///
+/// # Errors
+/// When the task has no `[geometry]`.
+pub fn chamfer_yield(task: &Task) -> Result<f64> {
+    if task.geometry()?.chamfers() == 0.0 {
+        return Ok(0.0);
+    }
+    let (f, mu) = (task.contact.force, task.contact.friction);
+    Ok(f * (1.0 - mu) / (1.0 + mu) / SERVO_KP)
 }
 
 /// `n` directions evenly over a half turn (the parts are point-symmetric), the first along +x.
@@ -83,12 +105,16 @@ fn inserts(sim: &mut Sim, offset: [f64; 2]) -> bool {
 }
 
 /// The insertion boundary along `theta`: bisects part B's offset between 0 (part A must go
-/// in) and four insertion limits (it must not).
+/// in) and the chamfers' reach plus three insertion limits (it must not).
 ///
 /// # Errors
-/// When part A does not go in centred, or goes in four insertion limits off.
+/// When part A does not go in centred, or goes in at the bracket's outer end.
 pub fn boundary(sim: &mut Sim, task: &Task, theta: f64) -> Result<Boundary> {
-    let geometric = task.geometry()?.insertion_limit(theta);
+    let geometry = task.geometry()?;
+    let (geometric, chamfer_reach) = (
+        geometry.insertion_limit(theta),
+        geometry.chamfer_reach(theta),
+    );
     let along = |d: f64| [d * theta.cos(), d * theta.sin()];
     let invalid = |reason: String| HarnessError::Invalid {
         what: "insertion boundary",
@@ -97,10 +123,10 @@ pub fn boundary(sim: &mut Sim, task: &Task, theta: f64) -> Result<Boundary> {
     if !inserts(sim, [0.0, 0.0]) {
         return Err(invalid("part A does not go in with part B centred".into()));
     }
-    let (mut lo, mut hi) = (0.0, OUTER * geometric);
+    let (mut lo, mut hi) = (0.0, chamfer_reach + OUTER * geometric);
     if inserts(sim, along(hi)) {
         return Err(invalid(format!(
-            "part A goes in {:.4} mm off along {:.1}°, {OUTER} times the geometry's limit",
+            "part A goes in {:.4} mm off along {:.1}°, {OUTER} insertion limits beyond the chamfers",
             hi * 1e3,
             theta.to_degrees()
         )));
@@ -116,6 +142,7 @@ pub fn boundary(sim: &mut Sim, task: &Task, theta: f64) -> Result<Boundary> {
     Ok(Boundary {
         theta,
         geometric,
+        chamfer_reach,
         measured: lo,
     })
 }

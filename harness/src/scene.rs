@@ -38,6 +38,9 @@ pub const SPHERE_RADIUS: f64 = 0.000002;
 pub const RIM_RINGS: usize = 4;
 /// Polygon count of a round hole's walls.
 pub const HOLE_SIDES: usize = 48;
+/// Wedges of a round peg's chamfer, its vertices on the peg's radius: the flats lie 2.7 µm
+/// inside a 5 mm radius.
+pub const CHAMFER_SIDES: usize = 96;
 /// Approach starts this far above part B's top (m).
 pub const APPROACH_CLEARANCE: f64 = 0.0001;
 /// A first image (before any contact) is taken with part A this far above part B's top (m).
@@ -94,6 +97,17 @@ impl Outline {
         }
     }
 
+    /// The outline's corners moved `offset` outwards (negative: inwards); a circle as a
+    /// polygon of [`CHAMFER_SIDES`] vertices on it.
+    fn corners(&self, offset: f64) -> Vec<[f64; 2]> {
+        let (v, apothem) = match self {
+            Self::Circle(r) => (polygon(*r, CHAMFER_SIDES, 0.0), *r),
+            Self::Polygon(v) => (v.clone(), self.inside([0.0, 0.0])),
+        };
+        let s = (apothem + offset) / apothem;
+        v.iter().map(|q| [q[0] * s, q[1] * s]).collect()
+    }
+
     /// Points along the outline moved `offset` outwards (negative: inwards), spaced at most `pitch`.
     fn ring(&self, offset: f64, pitch: f64) -> Vec<[f64; 2]> {
         match self {
@@ -130,11 +144,14 @@ impl Outline {
     }
 }
 
-/// The contact face of part A: the region the sphere bed covers.
+/// The contact face of part A: the region the sphere bed covers, and the chamfer around it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Face {
-    /// Outer boundary.
+    /// Outer boundary of the part's section.
     pub outer: Outline,
+    /// Leg of the 45-degree chamfer on the outer boundary's edge (m): the bed covers the flat
+    /// inside the outline moved in by it, convex wedges the chamfer.
+    pub chamfer: f64,
     /// Inner boundary (a bore), if any.
     pub inner: Option<Outline>,
     /// Only points within this distance of the axis can touch part B (m).
@@ -155,7 +172,7 @@ impl Face {
         let mut pts = Vec::new();
         for k in 0..RIM_RINGS {
             let inset = SPHERE_RADIUS + k as f64 * ring_step;
-            pts.extend(self.outer.ring(-inset, ring_pitch));
+            pts.extend(self.outer.ring(-inset - self.chamfer, ring_pitch));
             if let Some(inner) = &self.inner {
                 pts.extend(inner.ring(inset, ring_pitch));
             }
@@ -170,13 +187,35 @@ impl Face {
             for i in -ni..=ni {
                 let q = [i as f64 * p + shift, j as f64 * row];
                 let outside_inner = self.inner.as_ref().is_none_or(|o| -o.inside(q) >= p);
-                if self.outer.inside(q) >= p && outside_inner {
+                if self.outer.inside(q) >= p + self.chamfer && outside_inner {
                     pts.push(q);
                 }
             }
         }
         pts.retain(|q| q[0].hypot(q[1]) <= self.reach);
         pts
+    }
+
+    /// The chamfer as convex wedges, one per side of the outline (vertices in the task
+    /// frame): the sloped face from the flat's edge, [`SPHERE_RADIUS`] up (level with the
+    /// bed's sphere centres, so that a flat surface touches the bed alone), out to the
+    /// outline at the chamfer's height. None without a chamfer.
+    pub fn wedges(&self) -> Vec<Vec<[f64; 3]>> {
+        if self.chamfer == 0.0 {
+            return Vec::new();
+        }
+        let (rim, flat) = (self.outer.corners(0.0), self.outer.corners(-self.chamfer));
+        let c = self.chamfer;
+        (0..rim.len())
+            .map(|i| {
+                let j = (i + 1) % rim.len();
+                [(rim[i], c), (rim[j], c), (flat[i], c), (flat[j], c)]
+                    .into_iter()
+                    .chain([(flat[i], SPHERE_RADIUS), (flat[j], SPHERE_RADIUS)])
+                    .map(|(q, z)| [q[0], q[1], z])
+                    .collect()
+            })
+            .collect()
     }
 }
 
@@ -190,15 +229,8 @@ pub enum Piece {
         /// Half sizes.
         half: [f64; 3],
     },
-    /// A vertical prism over a convex polygon, from `z0` to `z1`.
-    Prism {
-        /// The polygon.
-        polygon: Vec<[f64; 2]>,
-        /// Bottom.
-        z0: f64,
-        /// Top.
-        z1: f64,
-    },
+    /// The convex hull of these vertices (a mesh geom).
+    Hull(Vec<[f64; 3]>),
     /// A vertical cylinder about the axis from `z0` to `z1`.
     Cylinder {
         /// Radius.
@@ -225,6 +257,9 @@ pub struct SceneSpec {
     pub pieces: Vec<Piece>,
     /// Height of part B's top in the goal frame (m): rim contacts settle at this tcp.z.
     pub top: f64,
+    /// Sum of the chamfers' legs on part A's tip and part B's mouth (m): part A resting on
+    /// them sits at most this far below `top`.
+    pub chamfers: f64,
     /// Sensor origin in the task frame (m).
     pub sensor_origin: [f64; 3],
     /// Imposed force (N).
@@ -245,17 +280,21 @@ fn polygon(r: f64, n: usize, phase: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// Part B of a blind hole: prisms between the hole polygon and a square of half side `s`,
+/// Part B of a blind hole: convex pieces between the hole outline and a square 1 mm
+/// outside its mouth (prisms, their inner faces sloped where the hole's edge is chamfered),
 /// four boxes out to the block's sides, a bottom box; tops at `depth`.
-fn pocket(hole: &[[f64; 2]], s: f64, block: [f64; 3], depth: f64) -> Vec<Piece> {
+fn pocket(hole: &Outline, chamfer: f64, block: [f64; 3], depth: f64) -> Vec<Piece> {
+    let (wall, mouth) = (hole.corners(0.0), hole.corners(chamfer));
+    let s = mouth.iter().map(|q| q[0].hypot(q[1])).fold(0.0, f64::max) + 0.001;
     let corners = [[s, s], [-s, s], [-s, -s], [s, -s]];
     let to_square = |v: [f64; 2]| {
         let k = s / v[0].abs().max(v[1].abs());
         [v[0] * k, v[1] * k]
     };
     let mut pieces = Vec::new();
-    for i in 0..hole.len() {
-        let (a, b) = (hole[i], hole[(i + 1) % hole.len()]);
+    for i in 0..wall.len() {
+        let j = (i + 1) % wall.len();
+        let (a, b) = (wall[i], wall[j]);
         let (ta, tb) = (a[1].atan2(a[0]), b[1].atan2(b[0]));
         let span = (tb - ta).rem_euclid(TAU);
         let mut polygon = vec![a, b, to_square(b)];
@@ -266,11 +305,15 @@ fn pocket(hole: &[[f64; 2]], s: f64, block: [f64; 3], depth: f64) -> Vec<Piece> 
             }
         }
         polygon.push(to_square(a));
-        pieces.push(Piece::Prism {
-            polygon,
-            z0: 0.0,
-            z1: depth,
-        });
+        let mut hull: Vec<[f64; 3]> = polygon.iter().map(|q| [q[0], q[1], 0.0]).collect();
+        let top = [mouth[i], mouth[j]]
+            .into_iter()
+            .chain(polygon[2..].iter().copied());
+        hull.extend(top.map(|q| [q[0], q[1], depth]));
+        if chamfer > 0.0 {
+            hull.extend([a, b].map(|q| [q[0], q[1], depth - chamfer]));
+        }
+        pieces.push(Piece::Hull(hull));
     }
     let (hx, hy) = (block[0] / 2.0, block[1] / 2.0);
     let zc = depth / 2.0;
@@ -319,19 +362,23 @@ impl SceneSpec {
                 hole_radius,
                 hole_depth,
                 block,
+                peg_chamfer,
+                hole_chamfer,
                 ..
             } => {
-                let apothem_circ = hole_radius / (PI / HOLE_SIDES as f64).cos();
-                let hole = polygon(apothem_circ, HOLE_SIDES, PI / HOLE_SIDES as f64);
+                // The hole's flats on its radius, their corners outside it.
+                let corner = hole_radius / (PI / HOLE_SIDES as f64).cos();
+                let hole = polygon(corner, HOLE_SIDES, PI / HOLE_SIDES as f64);
                 let face = Face {
                     outer: Outline::Circle(peg_radius),
+                    chamfer: peg_chamfer,
                     inner: None,
                     reach: peg_radius,
                     pitch: 0.0005,
                 };
                 (
                     face,
-                    pocket(&hole, apothem_circ + 0.001, block, hole_depth),
+                    pocket(&Outline::Polygon(hole), hole_chamfer, block, hole_depth),
                     hole_depth,
                 )
             }
@@ -340,19 +387,23 @@ impl SceneSpec {
                 hole_across_flats,
                 hole_depth,
                 block,
+                peg_chamfer,
+                hole_chamfer,
                 ..
             } => {
-                let octagon = |across: f64| polygon(across / 2.0 / (PI / 8.0).cos(), 8, PI / 8.0);
-                let circ = hole_across_flats / 2.0 / (PI / 8.0).cos();
+                let octagon = |across: f64| {
+                    Outline::Polygon(polygon(across / 2.0 / (PI / 8.0).cos(), 8, PI / 8.0))
+                };
                 let face = Face {
-                    outer: Outline::Polygon(octagon(peg_across_flats)),
+                    outer: octagon(peg_across_flats),
+                    chamfer: peg_chamfer,
                     inner: None,
                     reach: peg_across_flats,
                     pitch: 0.0005,
                 };
                 (
                     face,
-                    pocket(&octagon(hole_across_flats), circ + 0.001, block, hole_depth),
+                    pocket(&octagon(hole_across_flats), hole_chamfer, block, hole_depth),
                     hole_depth,
                 )
             }
@@ -367,6 +418,7 @@ impl SceneSpec {
             } => {
                 let face = Face {
                     outer: Outline::Circle(root_radius),
+                    chamfer: 0.0,
                     inner: Some(Outline::Circle(bore_radius)),
                     reach: reach_of(shaft_radius).min(root_radius),
                     pitch: 0.0006,
@@ -396,6 +448,7 @@ impl SceneSpec {
                 let (hx, hy) = (housing[0] / 2.0, housing[1] / 2.0);
                 let face = Face {
                     outer: Outline::Polygon(vec![[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]]),
+                    chamfer: 0.0,
                     inner: Some(Outline::Circle(bore_radius)),
                     reach: reach_of(seat_radius).min(hx.min(hy) - SPHERE_RADIUS),
                     pitch: 0.0008,
@@ -421,6 +474,7 @@ impl SceneSpec {
             face,
             pieces,
             top,
+            chamfers: geometry.chamfers(),
             sensor_origin: task.contact.sensor_origin,
             force: task.contact.force,
             friction: task.contact.friction,
@@ -434,7 +488,7 @@ impl SceneSpec {
         let f = |v: f64| fmt_num(v);
         let v3 = |v: [f64; 3]| format!("{} {} {}", f(v[0]), f(v[1]), f(v[2]));
         let damping_xy = 2.0 * (SERVO_KP * CARRIAGE_MASS).sqrt();
-        let bed = self.face.bed();
+        let (bed, wedges) = (self.face.bed(), self.face.wedges());
         let _ = writeln!(
             x,
             "<!-- Generated by `harness scene --task {}` from models_mjcf/{}/task.toml: do not edit. -->",
@@ -473,22 +527,17 @@ impl SceneSpec {
         let _ = writeln!(x, "  <asset>");
         let _ = writeln!(x, "    <mesh name=\"visual_a\" file=\"{}\"/>", self.mesh_a);
         let _ = writeln!(x, "    <mesh name=\"visual_b\" file=\"{}\"/>", self.mesh_b);
+        let hull = |name: String, vertices: &[[f64; 3]]| {
+            let v: Vec<String> = vertices.iter().map(|&q| v3(q)).collect();
+            format!("    <mesh name=\"{name}\" vertex=\"{}\"/>", v.join("  "))
+        };
         for (i, p) in self.pieces.iter().enumerate() {
-            if let Piece::Prism { polygon, z0, z1 } = p {
-                let verts: Vec<String> = [z0, z1]
-                    .iter()
-                    .flat_map(|z| {
-                        polygon
-                            .iter()
-                            .map(move |q| format!("{} {} {}", f(q[0]), f(q[1]), f(**z)))
-                    })
-                    .collect();
-                let _ = writeln!(
-                    x,
-                    "    <mesh name=\"piece{i}\" vertex=\"{}\"/>",
-                    verts.join("  ")
-                );
+            if let Piece::Hull(vertices) = p {
+                let _ = writeln!(x, "{}", hull(format!("piece{i}"), vertices));
             }
+        }
+        for (i, w) in wedges.iter().enumerate() {
+            let _ = writeln!(x, "{}", hull(format!("chamfer{i}"), w));
         }
         let _ = writeln!(x, "  </asset>");
         let _ = writeln!(x, "  <worldbody>");
@@ -537,7 +586,7 @@ impl SceneSpec {
                         v3(*half)
                     )
                 }
-                Piece::Prism { .. } => writeln!(
+                Piece::Hull(_) => writeln!(
                     x,
                     "      <geom name=\"piece{i}\" type=\"mesh\" mesh=\"piece{i}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>"
                 ),
@@ -589,6 +638,12 @@ impl SceneSpec {
                 f(q[0]),
                 f(q[1]),
                 f(SPHERE_RADIUS)
+            );
+        }
+        for i in 0..wedges.len() {
+            let _ = writeln!(
+                x,
+                "        <geom name=\"chamfer{i}\" type=\"mesh\" mesh=\"chamfer{i}\" rgba=\"0.8 0.3 0.2 1\"{hidden}/>"
             );
         }
         let _ = writeln!(

@@ -30,7 +30,8 @@ pub const MAX_TIME: f64 = 2.0;
 pub const SETTLE_SPEED: f64 = 1.0e-4;
 /// ... for this long (s) with at least one contact.
 pub const SETTLE_TIME: f64 = 0.01;
-/// Part A has entered part B once its frame is this far below part B's top (m).
+/// Part A has entered part B once its frame is this far below part B's top and its
+/// chamfers (m).
 pub const ENTRY_DEPTH: f64 = 0.0001;
 /// The feed's speed down to the goal once part A has entered (m/s) ...
 pub const INSERTION_SPEED: f64 = 0.1;
@@ -187,7 +188,8 @@ impl Sim {
             (MAX_TIME / dt).round() as usize,
             (SETTLE_TIME / dt).round() as usize,
         );
-        let (entered, dropped) = (self.spec.top - ENTRY_DEPTH, self.spec.top - DROP_DEPTH);
+        let entered = self.spec.top - self.spec.chamfers - ENTRY_DEPTH;
+        let dropped = self.spec.top - DROP_DEPTH;
         // The slide: its end and length, and when it started (steps), once the press settled.
         let mut sliding: Option<([f64; 2], f64, usize)> = None;
         let (mut calm, mut steps) = (0, 0);

@@ -25,6 +25,40 @@ pub fn scene(name: &str) -> (Task, Sim) {
     (task, sim)
 }
 
+/// A committed peg task (`peg_in_hole`, `octagon`) with 45-degree chamfers of legs `peg`
+/// and `hole` (m), written to a scratch folder with its meshes and scene, and a simulation
+/// of that scene.
+pub fn chamfered(name: &str, peg: f64, hole: f64) -> (Task, Sim) {
+    let committed = Task::find(name).expect("a committed task");
+    let text = std::fs::read_to_string(&committed.path).expect("its task file");
+    let last_table = text.lines().rfind(|l| l.starts_with('['));
+    assert_eq!(
+        last_table,
+        Some("[geometry]"),
+        "{name}: chamfers go at the end"
+    );
+    let dir = std::env::temp_dir().join(format!(
+        "chamfered-{name}-{}-{peg}-{hole}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).expect("a scratch folder");
+    let path = dir.join("task.toml");
+    let text = text.replace(
+        &format!("name = \"{name}\""),
+        &format!("name = \"{name}_chamfered\""),
+    );
+    std::fs::write(
+        &path,
+        format!("{text}\npeg_chamfer = {peg}\nhole_chamfer = {hole}\n"),
+    )
+    .expect("the chamfered task file");
+    let task = Task::load(&path).expect("the chamfered task");
+    task.write_meshes().expect("its meshes");
+    harness::sim::regenerate_scene(&task).expect("its scene");
+    let sim = Sim::of_task(&task).expect("its scene loads");
+    (task, sim)
+}
+
 /// The peg_in_hole map computed from the CAD meshes (centroid model, CPU backend).
 pub fn computed_peg_map() -> &'static FtMap {
     static MAP: OnceLock<FtMap> = OnceLock::new();
