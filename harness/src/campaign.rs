@@ -109,6 +109,8 @@ pub struct CampaignOptions {
     pub sigma_torque: Option<f64>,
     /// FMU parameter `sigma_force` (N).
     pub sigma_force: Option<f64>,
+    /// FMU parameter `sigma_depth` (m).
+    pub sigma_depth: Option<f64>,
     /// FMU parameter `mismatch` (share of the measured force's and torque's magnitudes).
     pub mismatch: Option<f64>,
 }
@@ -422,6 +424,7 @@ fn trial_config(
             iterations: options.iterations,
             sigma_torque: options.sigma_torque,
             sigma_force: options.sigma_force,
+            sigma_depth: options.sigma_depth,
             mismatch: options.mismatch,
             sigma_vision: options.sigma_vision,
             vision_method: Some(options.vision_method.parameter()),

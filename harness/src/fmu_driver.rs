@@ -38,6 +38,8 @@ pub struct Settings {
     pub sigma_torque: Option<f64>,
     /// `sigma_force` (N).
     pub sigma_force: Option<f64>,
+    /// `sigma_depth` (m).
+    pub sigma_depth: Option<f64>,
     /// `mismatch` (share of the measured magnitudes).
     pub mismatch: Option<f64>,
     /// `vision`: an absolute path of a vision model file.
@@ -87,6 +89,7 @@ struct Refs {
     sigma_torque: u32,
     mismatch: u32,
     sigma_force: u32,
+    sigma_depth: u32,
     vision: u32,
     sigma_vision: u32,
     vision_method: u32,
@@ -166,6 +169,7 @@ impl Fmu {
             sigma_torque: vr("sigma_torque")?,
             mismatch: vr("mismatch")?,
             sigma_force: vr("sigma_force")?,
+            sigma_depth: vr("sigma_depth")?,
             vision: vr("vision")?,
             sigma_vision: vr("sigma_vision")?,
             vision_method: vr("vision_method")?,
@@ -228,6 +232,7 @@ impl Fmu {
         let reals = [
             (r.sigma_torque, settings.sigma_torque, "sigma_torque"),
             (r.sigma_force, settings.sigma_force, "sigma_force"),
+            (r.sigma_depth, settings.sigma_depth, "sigma_depth"),
             (r.mismatch, settings.mismatch, "mismatch"),
             (r.sigma_vision, settings.sigma_vision, "sigma_vision"),
         ];

@@ -1,18 +1,26 @@
 //! The closed loop of Algorithm 1 through FtFusion.fmu (built by `cargo xtask fmu`).
 
 use ftmap::Task;
+use harness::boundary::chamfer_yield;
 use harness::campaign::{random_offsets, run_campaign};
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::Noise;
-use harness::sim::open_task;
+use harness::sim::{Sim, open_task};
 use harness::trial::{Strategy, TrialConfig};
+
+mod common;
 
 /// Runs 5 trials of `task` (seed 7, F/T noise on) through the FMU with `map` (None: the
 /// embedded one) and checks that each inserts the part within `most` contacts, the last
-/// approach point within the fit's clearance of the truth.
-fn five_trials_succeed_within(task: &str, map: Option<std::path::PathBuf>, most: usize) {
+/// approach point within the fit's clearance (and what the robot yields on a chamfer) of
+/// the truth.
+fn five_trials_succeed_within(
+    task: &Task,
+    sim: &mut Sim,
+    map: Option<std::path::PathBuf>,
+    most: usize,
+) {
     let fmu = Fmu::load(&default_fmu_path()).unwrap_or_else(|e| panic!("{e}"));
-    let (task, mut sim) = open_task(task).expect("the task and its scene");
     let cfg = TrialConfig {
         strategy: Strategy::Pf,
         max_contacts: most,
@@ -28,8 +36,9 @@ fn five_trials_succeed_within(task: &str, map: Option<std::path::PathBuf>, most:
     };
     let offsets = random_offsets(5, task.omega.size_trans, 7);
     let results =
-        run_campaign(&mut sim, Some(&fmu), None, &cfg, &offsets, 7).expect("the campaign runs");
-    let clearance = task.geometry().expect("a [geometry]").clearance();
+        run_campaign(sim, Some(&fmu), None, &cfg, &offsets, 7).expect("the campaign runs");
+    let clearance = task.geometry().expect("a [geometry]").clearance()
+        + chamfer_yield(task).expect("a [geometry]");
     for r in &results {
         assert!(
             r.success && r.contacts <= most,
@@ -43,16 +52,33 @@ fn five_trials_succeed_within(task: &str, map: Option<std::path::PathBuf>, most:
     }
 }
 
+/// The map of `task` computed from its CAD meshes, cached like a campaign's.
+fn computed_map(task: &Task) -> std::path::PathBuf {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
+    ftmap::generate::cached(task, &dir)
+        .expect("the map computed from CAD")
+        .0
+}
+
 #[test]
 fn a_5_trial_peg_in_hole_campaign_through_the_fmu_succeeds_within_10_contacts() {
-    five_trials_succeed_within("peg_in_hole", None, 10);
+    let (task, mut sim) = open_task("peg_in_hole").expect("the task and its scene");
+    five_trials_succeed_within(&task, &mut sim, None, 10);
 }
 
 #[test]
 fn a_5_trial_tight_fit_campaign_succeeds_within_15_contacts() {
-    // 0.02 mm radial clearance; the map computed from the CAD meshes (cached like a campaign's).
-    let task = Task::find("tight_peg").unwrap();
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
-    let (map, _) = ftmap::generate::cached(&task, &dir).unwrap();
-    five_trials_succeed_within("tight_peg", Some(map), 15);
+    // 0.02 mm radial clearance.
+    let (task, mut sim) = open_task("tight_peg").expect("the task and its scene");
+    let map = computed_map(&task);
+    five_trials_succeed_within(&task, &mut sim, Some(map), 15);
+}
+
+#[test]
+fn a_5_trial_campaign_with_chamfers_succeeds_within_5_contacts() {
+    // peg_in_hole with a 0.5 + 0.5 mm chamfer pair: its map, scene and the FMU's use of the
+    // contact height on the chamfer (100 trials: 2.89 contacts mean, max 3).
+    let (task, mut sim) = common::chamfered("peg_in_hole", 0.5e-3, 0.5e-3);
+    let map = computed_map(&task);
+    five_trials_succeed_within(&task, &mut sim, Some(map), 5);
 }

@@ -310,7 +310,7 @@ pub const VARIABLES: &[Variable] = &[
         "sigma_depth",
         106,
         Real,
-        Start::Real(0.0005),
+        Start::Real(0.00002),
         "m",
         [Some(0.0), Some(1.0)],
         "Standard deviation of the contact height tcp.z against the map's depth; 0: depth unused",

@@ -180,6 +180,12 @@ impl Lookup {
         self.has_depth && height < 0.5 * f64::from(self.depth_range[0] + self.depth_range[1])
     }
 
+    /// Whether a contact at `height` (m) rests more than `slack` below the highest contact
+    /// the map holds (part B's top face): on a chamfer or another slope.
+    pub fn below_top(&self, height: f64, slack: f64) -> bool {
+        self.has_depth && height < f64::from(self.depth_range[1]) - slack
+    }
+
     /// Height of a TCP position against the approach vector (the contact height at a contact).
     pub fn height(&self, tcp: &[f64; 6]) -> f64 {
         -(self.approach[0] * tcp[0] + self.approach[1] * tcp[1] + self.approach[2] * tcp[2])

@@ -84,7 +84,7 @@ impl Default for Config {
             iterations: 20,
             sigma_force: 1.0,
             sigma_torque: 0.003,
-            sigma_depth: 0.0005,
+            sigma_depth: 0.00002,
             jitter: 0.15,
             confidence_radius: 1e-4,
             threshold: 0.9,
@@ -294,11 +294,14 @@ impl Filter {
         let c = &self.cfg;
         let height = self.lookup.height(&m.tcp);
         // A contact that did not go in is a negative contact where the map allows one; it
-        // replaces the depth channel then.
+        // replaces the depth channel then, unless part A rests measurably below part B's top
+        // (on a chamfer: how far down says how far off), where both count.
         let negative = self
             .negative
             .filter(|_| !m.vision_only && !self.lookup.inserted(height));
-        let use_depth = c.sigma_depth > 0.0 && self.lookup.has_depth() && negative.is_none();
+        let use_depth = c.sigma_depth > 0.0
+            && self.lookup.has_depth()
+            && (negative.is_none() || self.lookup.below_top(height, 2.0 * c.sigma_depth));
         let mut meas = [0.0f32; LANES];
         for (dst, &src) in meas.iter_mut().zip(&m.wrench) {
             *dst = src as f32;

@@ -230,6 +230,9 @@ pub struct RunArgs {
     /// FMU parameter `sigma_force` (N).
     #[arg(long)]
     pub sigma_force: Option<f64>,
+    /// FMU parameter `sigma_depth` (m).
+    #[arg(long)]
+    pub sigma_depth: Option<f64>,
     /// FMU parameter `mismatch` (share of the measured force's and torque's magnitudes).
     #[arg(long)]
     pub mismatch: Option<f64>,
@@ -291,6 +294,7 @@ impl RunArgs {
             iterations: self.iterations,
             sigma_torque: self.sigma_torque,
             sigma_force: self.sigma_force,
+            sigma_depth: self.sigma_depth,
             mismatch: self.mismatch,
         }
     }
