@@ -16,6 +16,40 @@ pub enum MapError {
         /// The operating system's error.
         source: std::io::Error,
     },
+    /// The path names something other than a regular file (a FIFO, a device, a folder).
+    #[error("{}: not a regular file but {kind}: refused before reading", path.display())]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+        /// What it is.
+        kind: &'static str,
+    },
+    /// The file is larger than what it may hold.
+    #[error("{}: {size} bytes, more than {what} may have ({max} bytes)", path.display())]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size (bytes).
+        size: u64,
+        /// The limit (bytes).
+        max: u64,
+        /// What the file was read as.
+        what: &'static str,
+    },
+    /// A map value that is NaN (in a whole map) or beyond any physical magnitude.
+    #[error("{}: corrupt data: cell {cell}, channel {channel} = {value}: not a finite value within ±{max}", path.display())]
+    BadData {
+        /// The file.
+        path: PathBuf,
+        /// The cell.
+        cell: usize,
+        /// The channel's name.
+        channel: &'static str,
+        /// The value read.
+        value: f32,
+        /// The largest magnitude allowed.
+        max: f64,
+    },
     /// The file does not start with the FT-Map magic bytes.
     #[error("{}: not an FT-Map file (starts with {found:02x?}, an FT-Map starts with {expected:02x?})", path.display())]
     NotAMap {

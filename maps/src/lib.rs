@@ -3,10 +3,12 @@
 //! Modules follow the paper's concepts: [`task`] (the task file, the tolerance space Omega
 //! and its DOFs, the parametric CAD solids), [`mesh`], [`depth`] (the z-buffer backends),
 //! [`wrench`] (wrench models), [`generate`] (the FT-Map computation), [`map`] (the map type,
-//! its lookup and file format) and [`vision`] (the camera and the parts' features).
+//! its lookup and file format), [`vision`] (the camera and the parts' features) and
+//! [`file`] (reading the files a user names, bounded).
 
 pub mod depth;
 pub mod error;
+pub mod file;
 pub mod generate;
 pub mod map;
 pub mod mesh;

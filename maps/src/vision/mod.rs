@@ -155,7 +155,14 @@ pub struct VisionModel {
     pub active: Prism,
     /// Passive part B (fixed), in the goal frame.
     pub passive: Prism,
+    /// The task whose parts these are (a map of another task does not fit them); absent in
+    /// files that do not say.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<String>,
 }
+
+/// The largest vision model file this build reads (bytes).
+pub const MAX_FILE: u64 = 1 << 20;
 
 /// The file layout: kind and version, then the model.
 #[derive(Serialize, Deserialize)]
@@ -192,6 +199,7 @@ impl VisionModel {
                         },
                         z: [0.0, seat_height],
                     },
+                    task: None,
                 })
             }
             _ => None,
@@ -209,7 +217,12 @@ impl VisionModel {
             return Ok(None);
         };
         Self::of_geometry(task.geometry()?, Camera::from(setup))
-            .map(Some)
+            .map(|m| {
+                Some(Self {
+                    task: Some(task.name.clone()),
+                    ..m
+                })
+            })
             .ok_or_else(|| MapError::Task {
                 path: task.path.clone(),
                 reason: "[camera]: the parts of its [geometry] have no silhouette edges to \
@@ -237,7 +250,8 @@ impl VisionModel {
             path: path.to_owned(),
             reason,
         };
-        let text = std::fs::read_to_string(path).map_err(MapError::io(path))?;
+        let bytes = crate::file::read_regular(path, MAX_FILE, "a vision model file")?;
+        let text = String::from_utf8(bytes).map_err(|e| bad(format!("not UTF-8 text: {e}")))?;
         let file: VisionFile =
             serde_json::from_str(&text).map_err(|e| bad(format!("not a vision model: {e}")))?;
         if file.kind != VISION_KIND {
