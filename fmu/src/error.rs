@@ -48,6 +48,16 @@ pub enum FusionError {
         /// Its value.
         value: f64,
     },
+    /// A finite input beyond any physical magnitude.
+    #[error("input `{name}` is {value}, beyond ±{max}: not a measurement, skipped")]
+    Absurd {
+        /// The first such input.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// The largest magnitude accepted.
+        max: f64,
+    },
     /// Saved state bytes that this build cannot restore into this instance.
     #[error("FMU state refused: {0}")]
     State(String),

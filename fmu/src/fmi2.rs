@@ -32,7 +32,36 @@ fn code(s: Status) -> fmi2Status {
     }
 }
 
-/// The text of a caught panic.
+std::thread_local! {
+    /// The message and place of the last panic on this thread, for the logger.
+    static LAST_PANIC: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Replaces the default panic hook, which prints to the host's stderr, by one that keeps
+/// the message for the instance's logger (the FMU's copy of the Rust runtime is its own:
+/// this hook sees the FMU's panics only). Idempotent.
+fn quiet_panics() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        std::panic::set_hook(Box::new(|info| {
+            let place = info
+                .location()
+                .map(|l| format!(" at {}:{}", l.file(), l.line()))
+                .unwrap_or_default();
+            let text = format!("{}{place}", panic_text(info.payload()));
+            LAST_PANIC.with(|p| *p.borrow_mut() = Some(text));
+        }));
+    });
+}
+
+/// The text of a caught panic: what the hook kept (with its place), else its payload.
+fn caught_panic(p: &(dyn std::any::Any + Send)) -> String {
+    LAST_PANIC
+        .with(|last| last.borrow_mut().take())
+        .unwrap_or_else(|| panic_text(p))
+}
+
+/// The text of a panic's payload.
 fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
     p.downcast_ref::<&str>()
         .map(|s| s.to_string())
@@ -66,7 +95,7 @@ unsafe fn with(
             let msg = format!(
                 "{}: internal error (panic: {}); the instance is in the Error state",
                 call.name(),
-                panic_text(&*p)
+                caught_panic(&*p)
             );
             let _ = catch_unwind(AssertUnwindSafe(|| {
                 comp.instance.poison();
@@ -176,6 +205,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
     }
     // SAFETY: non-null, and an importer passes a valid struct.
     let cb = unsafe { *functions };
+    quiet_panics();
     let outcome = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: C strings or null by the contract above.
         let name = unsafe { text(instance_name, "instanceName") }
@@ -994,5 +1024,22 @@ mod tests {
         );
         assert_eq!(resources_dir(None), None);
         assert_eq!(resources_dir(Some("http://example.com/x")), None);
+    }
+
+    #[test]
+    fn a_panic_is_kept_for_the_logger_with_its_place_not_printed() {
+        quiet_panics();
+        let caught = std::thread::spawn(|| {
+            let p = catch_unwind(|| panic!("capacity overflow")).expect_err("it panicked");
+            caught_panic(&*p)
+        })
+        .join()
+        .expect("the thread ends");
+        // The default hook again, for the other tests' failures in this process.
+        drop(std::panic::take_hook());
+        assert!(
+            caught.contains("capacity overflow") && caught.contains("fmi2.rs:"),
+            "{caught}"
+        );
     }
 }

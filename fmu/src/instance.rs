@@ -349,16 +349,46 @@ impl Instance {
     /// fmi2ExitInitializationMode: checks the parameters, loads the map, spreads the particles.
     pub fn exit_initialization_mode(&mut self) -> Result<Status> {
         self.check(Call::ExitInitializationMode)?;
-        let params = Params::from_store(&self.store)?;
+        self.filter = Some(self.new_filter(&self.store)?);
+        self.write_outputs();
+        self.mode = Mode::StepComplete;
+        Ok(Status::Ok)
+    }
+
+    /// The filter the parameters in `store` make: checked, its map (and vision model) loaded,
+    /// the particles spread.
+    fn new_filter(&self, store: &Store) -> Result<Filter> {
+        let params = Params::from_store(store)?;
         let path = self
             .resource_path(&params.map)
             .map_err(|(path, reason)| FusionError::Map { path, reason })?;
-        let map = ftmap::map::format::load(&path).map_err(FusionError::MapFile)?;
-        let mut filter = Filter::new(&map, &path, params.config)?;
+        let lookup = crate::shared::map(&path)?;
+        let task = lookup.task().to_owned();
+        let mut filter = Filter::with_lookup(lookup, params.config);
         if let Some(name) = &params.vision {
             let vision_err = |(path, reason)| FusionError::Vision { path, reason };
             let file = self.resource_path(name).map_err(vision_err)?;
             let model = ftmap::vision::VisionModel::load(&file).map_err(FusionError::VisionFile)?;
+            match &model.task {
+                Some(parts) if *parts != task => {
+                    return Err(FusionError::Vision {
+                        path: file,
+                        reason: format!(
+                            "its parts are task `{parts}`'s, the map {} is task `{task}`'s",
+                            path.display(),
+                        ),
+                    });
+                }
+                Some(_) => {}
+                None => self.log(
+                    Status::Ok,
+                    "logFilter",
+                    &format!(
+                        "vision model {} does not name its task: it is taken to fit the map's, `{task}`",
+                        file.display(),
+                    ),
+                ),
+            }
             let sense = VisionSense::new(
                 model,
                 params.vision_method,
@@ -388,15 +418,12 @@ impl Instance {
             &format!(
                 "map {} ({} cells over {}), {} particles",
                 path.display(),
-                map.grid().cells(),
+                filter.lookup().cells(),
                 dofs.join(", "),
                 params.config.particles
             ),
         );
-        self.filter = Some(filter);
-        self.write_outputs();
-        self.mode = Mode::StepComplete;
-        Ok(Status::Ok)
+        Ok(filter)
     }
 
     /// fmi2Terminate.
@@ -590,21 +617,22 @@ impl Instance {
                     );
                     status = Status::Warning;
                 }
+                // Not a warning: the filter handled the measurement as designed, and
+                // importers (the FMI reference importer among them) end a run at one.
                 if report.respread > 0 {
                     self.log(
-                        Status::Warning,
-                        "logStatusWarning",
+                        Status::Ok,
+                        "logFilter",
                         &format!(
                             "t = {}: no particle explains the measurement (every likelihood underflowed): \
                              re-spread half of the particles uniformly ({} of the iterations)",
                             self.time, report.respread
                         ),
                     );
-                    status = Status::Warning;
                 }
                 Ok(status)
             }
-            Err(e @ FusionError::NonFinite { .. }) => {
+            Err(e @ (FusionError::NonFinite { .. } | FusionError::Absurd { .. })) => {
                 self.log(
                     Status::Warning,
                     "logStatusWarning",
@@ -687,15 +715,34 @@ impl Instance {
                     "bytes after the end of the state".into(),
                 ));
             }
+            // A state saved before initialization takes the instance back there.
+            (Some(_), false) if r.done() => {
+                self.filter = None;
+                self.mode = Mode::Instantiated;
+            }
             (Some(_), false) => {
                 return Err(FusionError::State(
-                    "saved before initialization, this instance is initialized".into(),
+                    "bytes after the end of the state".into(),
                 ));
             }
+            // A state saved after initialization into an instance not initialized (FMI 2.0
+            // allows it; the reference importer restores a saved run this way): initialize
+            // with the saved parameters, then restore the filter.
             (None, true) => {
-                return Err(FusionError::State(
-                    "saved after initialization: initialize this instance with the same parameters first".into(),
-                ));
+                let mut filter = self.new_filter(&store).map_err(|e| {
+                    FusionError::State(format!(
+                        "its parameters do not initialize this instance: {}",
+                        crate::error::report(&e)
+                    ))
+                })?;
+                filter.restore(&mut r)?;
+                if !r.done() {
+                    return Err(FusionError::State(
+                        "bytes after the end of the state".into(),
+                    ));
+                }
+                self.filter = Some(filter);
+                self.mode = Mode::StepComplete;
             }
         }
         self.store = store;

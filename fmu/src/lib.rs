@@ -5,6 +5,7 @@ pub mod filter;
 pub mod fmi2;
 pub mod instance;
 pub mod params;
+pub mod shared;
 
 pub use error::{FusionError, Result};
 pub use filter::{Config, Estimate, Filter, Interpolation, Measurement, Report};

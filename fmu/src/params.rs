@@ -185,7 +185,16 @@ impl Params {
             iterations: checked(store, "iterations")? as usize,
             sigma_force: checked(store, "sigma_force")?,
             sigma_torque: checked(store, "sigma_torque")?,
-            sigma_depth: checked(store, "sigma_depth")?,
+            sigma_depth: match checked(store, "sigma_depth")? {
+                s if s > 0.0 && s < 1e-9 => {
+                    return Err(FusionError::Parameter {
+                        name: "sigma_depth",
+                        value: format!("{s}"),
+                        range: "0 (depth unused) or [1e-9, 1]".into(),
+                    });
+                }
+                s => s,
+            },
             jitter: checked(store, "jitter")?,
             confidence_radius: checked(store, "confidence_radius")?,
             threshold: checked(store, "threshold")?,

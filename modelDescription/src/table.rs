@@ -313,7 +313,7 @@ pub const VARIABLES: &[Variable] = &[
         Start::Real(0.00002),
         "m",
         [Some(0.0), Some(1.0)],
-        "Standard deviation of the contact height tcp.z against the map's depth; 0: depth unused",
+        "Standard deviation of the contact height tcp.z against the map's depth; 0: depth unused, else at least 1e-9",
     ),
     param(
         "jitter",

@@ -58,6 +58,8 @@ impl MapAxis {
 /// The map prepared for lookups.
 #[derive(Debug, Clone)]
 pub struct Lookup {
+    /// The map's task (its metadata).
+    task: String,
     axes: Vec<MapAxis>,
     cells: Vec<[f32; LANES]>,
     has_depth: bool,
@@ -131,6 +133,7 @@ impl Lookup {
             cells.push(padded);
         }
         let mut lookup = Self {
+            task: map.meta().task.clone(),
             axes,
             cells,
             has_depth: depth_seen,
@@ -147,6 +150,16 @@ impl Lookup {
             }
         }
         Ok(lookup)
+    }
+
+    /// The task the map was made for.
+    pub fn task(&self) -> &str {
+        &self.task
+    }
+
+    /// Number of cells.
+    pub fn cells(&self) -> usize {
+        self.cells.len()
     }
 
     /// The axes in map order.

@@ -43,6 +43,10 @@ const JITTER_SPREAD: f64 = 0.5;
 /// Share of the particles re-spread uniformly when every likelihood underflows.
 const RESPREAD_SHARE: f64 = 0.5;
 
+/// The largest magnitude of a measured value (N, N.m, m, rad, px): beyond it an input is
+/// a broken signal, not a measurement (and its square would overflow the likelihood).
+pub const MAX_INPUT: f64 = 1.0e6;
+
 /// Settings of the filter (the FMU's parameters, checked).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Config {
@@ -244,17 +248,29 @@ impl Filter {
         }
     }
 
-    /// Checks a measurement: every value finite.
+    /// Checks a measurement: every value finite and within ±[`MAX_INPUT`].
     pub fn check(m: &Measurement) -> Result<()> {
+        let refuse = |name: &'static str, value: f64| {
+            if value.is_finite() {
+                FusionError::Absurd {
+                    name,
+                    value,
+                    max: MAX_INPUT,
+                }
+            } else {
+                FusionError::NonFinite { name, value }
+            }
+        };
+        let bad = |v: &f64| v.is_nan() || v.abs() > MAX_INPUT;
         if let Some(v) = &m.vision
             && let Some((&value, name)) = v
                 .distances
                 .iter()
                 .chain(&v.passive)
                 .zip(model_description::VISION_FEATURES)
-                .find(|(v, _)| !v.is_finite())
+                .find(|(v, _)| bad(v))
         {
-            return Err(FusionError::NonFinite { name, value });
+            return Err(refuse(name, value));
         }
         match m
             .wrench
@@ -267,9 +283,9 @@ impl Filter {
                     .chain(&model_description::TCP)
                     .chain(&model_description::SLIDE_START),
             )
-            .find(|(v, _)| !v.is_finite())
+            .find(|(v, _)| bad(v))
         {
-            Some((&value, &name)) => Err(FusionError::NonFinite { name, value }),
+            Some((&value, &name)) => Err(refuse(name, value)),
             None => Ok(()),
         }
     }
@@ -517,6 +533,12 @@ where
 /// linear weights into `w` and returns the effective sample size (sum w)^2 / sum w^2.
 fn normalise(lw: &mut [f32], w: &mut [f32]) -> f64 {
     let max = lw.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    if !max.is_finite() {
+        // No weight left (or none finite): uniform weights, the particles as they are.
+        lw.fill(0.0);
+        w.fill(1.0 / w.len() as f32);
+        return w.len() as f64;
+    }
     let (mut sum, mut sum2) = (0.0f64, 0.0f64);
     for (o, &l) in w.iter_mut().zip(lw.iter()) {
         let x = (l - max).exp();

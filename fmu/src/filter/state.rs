@@ -151,8 +151,20 @@ impl Filter {
         let measurements = r.u32()?;
         let rng: Xoshiro256PlusPlus = serde_json::from_slice(r.bytes()?)
             .map_err(|e| FusionError::State(format!("random generator state: {e}")))?;
-        if pos.iter().chain(&lw).any(|v| v.is_nan()) {
-            return Err(FusionError::State("NaN in the particles".into()));
+        if let Some(v) = pos.iter().find(|v| !v.is_finite()) {
+            return Err(FusionError::State(format!(
+                "a particle's coordinate is {v}"
+            )));
+        }
+        // Normalised log-weights are <= 0 (to f32 rounding), -inf for a particle without
+        // weight, and at least one is finite.
+        if let Some(v) = lw.iter().find(|v| v.is_nan() || **v > 1e-3) {
+            return Err(FusionError::State(format!(
+                "a particle's log-weight is {v}: the weights are not normalised"
+            )));
+        }
+        if lw.iter().all(|v| v.is_infinite()) {
+            return Err(FusionError::State("no particle has weight".into()));
         }
         self.pos = pos;
         self.lw = lw;

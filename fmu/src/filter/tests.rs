@@ -769,3 +769,67 @@ fn a_contact_resting_on_a_chamfer_says_how_far_off_it_is() {
         assert_eq!(with.weight(i), without.weight(i), "particle {i}");
     }
 }
+
+#[test]
+fn a_tampered_state_with_unnormalised_or_infinite_weights_is_refused() {
+    let f = filter(21);
+    type Tamper = fn(&mut Filter);
+    let cases: [(Tamper, &str); 4] = [
+        (|f| f.lw[7] = f32::INFINITY, "log-weight is inf"),
+        (|f| f.lw[7] = 3.0, "log-weight is 3"),
+        (|f| f.lw.fill(f32::NEG_INFINITY), "no particle has weight"),
+        (|f| f.pos[5] = f32::NAN, "coordinate is NaN"),
+    ];
+    for (tamper, want) in cases {
+        let mut bad = f.clone();
+        tamper(&mut bad);
+        let mut w = Writer::default();
+        bad.save(&mut w);
+        let mut g = filter(22);
+        match g.restore(&mut Reader::new(&w.0)) {
+            Err(FusionError::State(m)) => assert!(m.contains(want), "{m}"),
+            other => panic!("{want}: {other:?}"),
+        }
+    }
+    // A particle without weight (-inf) beside weighted ones is a state the filter gives out.
+    let mut fine = f.clone();
+    fine.lw[3] = f32::NEG_INFINITY;
+    let mut w = Writer::default();
+    fine.save(&mut w);
+    filter(23)
+        .restore(&mut Reader::new(&w.0))
+        .expect("a particle without weight is a valid state");
+}
+
+#[test]
+fn inputs_beyond_a_physical_magnitude_are_refused_by_name() {
+    let mut f = filter(24);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(24);
+    let sound = measurement(1e-3, 1e-3, [0.0, 0.0], 1e-3, &mut rng);
+    type Spoil = fn(&mut Measurement);
+    let cases: [(Spoil, &str); 3] = [
+        (|m| m.wrench[0] = 2e19, "wrench.fx"),
+        (|m| m.tcp[2] = -3e7, "tcp.z"),
+        (|m| m.slide_start = Some([0.0, 1e300]), "slide_start.y"),
+    ];
+    for (spoil, name) in cases {
+        let mut m = sound;
+        spoil(&mut m);
+        match f.measure(&m) {
+            Err(FusionError::Absurd { name: n, .. }) => assert_eq!(n, name),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+    // At the bound itself the measurement is taken and every output stays finite.
+    let mut m = sound;
+    m.wrench = [
+        MAX_INPUT, -MAX_INPUT, MAX_INPUT, MAX_INPUT, -MAX_INPUT, MAX_INPUT,
+    ];
+    m.tcp[2] = -MAX_INPUT;
+    f.measure(&m).expect("within the bound");
+    let e = f.estimate();
+    assert!(
+        e.pose.iter().chain(&e.std).all(|v| v.is_finite()) && e.confidence.is_finite(),
+        "{e:?}"
+    );
+}

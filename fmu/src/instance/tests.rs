@@ -4,6 +4,7 @@
 use std::cell::RefCell;
 use std::path::PathBuf;
 use std::rc::Rc;
+use std::sync::Arc;
 
 use super::*;
 use ftfusion_testkit::{field, peg_map};
@@ -37,9 +38,18 @@ fn write_resources() -> PathBuf {
     let at = bytes.len() / 2;
     bytes[at] ^= 0x40;
     std::fs::write(dir.join("corrupt.ftmap"), bytes).expect("write corrupt map");
-    ftfusion_testkit::bearing_vision()
-        .save(&dir.join("bearing.vision.json"))
+    // The synthetic map is no task's: a model that does not say its task fits it, one of
+    // the bearing housing does not.
+    let model = ftfusion_testkit::bearing_vision();
+    model
+        .save(&dir.join("other_task.vision.json"))
         .expect("write vision model");
+    ftmap::vision::VisionModel {
+        task: None,
+        ..model
+    }
+    .save(&dir.join("bearing.vision.json"))
+    .expect("write vision model");
     std::fs::write(
         dir.join("broken.vision.json"),
         "{\"kind\": \"ftfusion-vision\"",
@@ -296,11 +306,6 @@ fn a_restored_state_replays_the_same_outputs_and_foreign_bytes_are_refused() {
         Err(FusionError::State(_))
     ));
     assert!(i.restore_state(&saved[..saved.len() - 1]).is_err());
-    let (fresh, _) = instance();
-    assert!(
-        i.restore_state(&fresh.save_state().expect("allowed"))
-            .is_err()
-    );
     assert_eq!(
         (
             real(&i, "object.x"),
@@ -321,13 +326,20 @@ fn missing_and_broken_vision_models_fail_initialization_naming_the_file() {
     for (name, problem) in [
         ("nothere.vision.json", "No such file"),
         ("broken.vision.json", "not a vision model"),
+        (
+            "other_task.vision.json",
+            "its parts are task `bearing_housing`'s",
+        ),
     ] {
         let (mut i, _) = instance();
         set_string(&mut i, "map", "peg.ftmap").expect("parameter");
         set_string(&mut i, "vision", name).expect("parameter");
         i.enter_initialization_mode().expect("allowed");
         let e = i.exit_initialization_mode().expect_err("bad vision model");
-        assert!(matches!(e, FusionError::VisionFile(_)), "{e}");
+        assert!(
+            matches!(e, FusionError::VisionFile(_) | FusionError::Vision { .. }),
+            "{e}"
+        );
         let line = crate::error::report(&e);
         assert!(line.contains(name) && line.contains(problem), "{line}");
     }
@@ -427,4 +439,186 @@ fn a_slide_start_set_with_the_contact_rules_out_the_line_swept() {
     let (swept, end) = (run(true), run(false));
     assert!(swept.iter().chain(&end).all(|v| v.is_finite()));
     assert_ne!(swept, end, "the line swept changes the estimate");
+}
+
+#[test]
+fn a_state_saved_after_initialization_restores_into_a_fresh_instance() {
+    // FMI 2.0 allows fmi2SetFMUstate right after fmi2Instantiate; the reference importer
+    // restores a saved run that way and goes on stepping.
+    let (mut a, _) = initialized();
+    contact(&mut a, 0.0, [-1e-3, 3e-3], [0.0, 0.0]);
+    let saved = a.save_state().expect("allowed");
+    let (mut b, _) = instance();
+    assert_eq!(
+        b.restore_state(&saved).expect("a state of this FMU"),
+        Status::Ok
+    );
+    assert_eq!(b.mode(), Mode::StepComplete);
+    for i in [&mut a, &mut b] {
+        contact(i, 1.0, [-1e-3, 3e-3], [1e-3, 1e-3]);
+    }
+    for name in ["object.x", "object.y", "object.x_std", "confidence"] {
+        assert_eq!(real(&a, name), real(&b, name), "{name}");
+    }
+    // And a state saved before initialization takes an initialized instance back there.
+    let (fresh, _) = instance();
+    let before = fresh.save_state().expect("allowed");
+    a.restore_state(&before).expect("a state of this FMU");
+    assert_eq!(a.mode(), Mode::Instantiated);
+    set_string(&mut a, "map", "peg.ftmap").expect("parameter");
+    a.enter_initialization_mode().expect("allowed again");
+    a.exit_initialization_mode().expect("initializes again");
+}
+
+/// The outputs the FMU gives: every Real output.
+fn outputs(i: &Instance) -> Vec<(String, f64)> {
+    VARIABLES
+        .iter()
+        .filter(|v| v.causality == Causality::Output && v.ty == VarType::Real)
+        .map(|v| (v.name.to_string(), real(i, v.name)))
+        .collect()
+}
+
+#[test]
+fn every_parameter_at_either_end_of_its_range_keeps_every_output_finite() {
+    let mut ran = 0;
+    for v in VARIABLES
+        .iter()
+        .filter(|v| v.causality == Causality::Parameter)
+    {
+        for end in [v.min, v.max].into_iter().flatten() {
+            let (mut i, _) = instance();
+            set_string(&mut i, "map", "peg.ftmap").expect("parameter");
+            // A million particles at a thousand iterations would take minutes: the ends of
+            // `particles` run at one iteration, the other parameters at 200 particles.
+            match v.name {
+                "particles" => set_int(&mut i, "iterations", 1).expect("parameter"),
+                _ => set_int(&mut i, "particles", 200).expect("parameter"),
+            };
+            let r = match v.ty {
+                VarType::Integer => set_int(&mut i, v.name, end as i32),
+                _ => set_reals(&mut i, &[v.name], &[end]),
+            };
+            r.expect("a value in the range");
+            i.enter_initialization_mode().expect("allowed");
+            i.exit_initialization_mode()
+                .unwrap_or_else(|e| panic!("{} = {end}: {e}", v.name));
+            // Sound contacts, a contact that went in, and the largest inputs accepted.
+            contact(&mut i, 0.0, [1e-3, -2e-3], [0.0, 0.0]);
+            contact(&mut i, 1.0, [1e-3, -2e-3], [1e-3, -2e-3]);
+            let names = ["wrench.fx", "wrench.ty", "tcp.x", "tcp.z"];
+            set_reals(&mut i, &names, &[1e6, -1e6, 1e6, -1e6]).expect("inputs");
+            set_bool(&mut i, "contact", true);
+            i.do_step(2.0, 0.1).expect("a step");
+            set_bool(&mut i, "contact", false);
+            i.do_step(2.1, 0.1).expect("a step");
+            for (name, x) in outputs(&i) {
+                assert!(x.is_finite(), "{} = {end}: output {name} = {x}", v.name);
+            }
+            let saved = i.save_state().expect("allowed");
+            i.restore_state(&saved)
+                .unwrap_or_else(|e| panic!("{} = {end}: its own state: {e}", v.name));
+            ran += 1;
+        }
+    }
+    assert!(ran >= 25, "{ran} cases");
+}
+
+#[test]
+fn a_sigma_depth_between_zero_and_a_nanometre_is_refused() {
+    let (mut i, log) = instance();
+    set_string(&mut i, "map", "peg.ftmap").expect("parameter");
+    set_reals(&mut i, &["sigma_depth"], &[1e-20]).expect("checked at initialization");
+    i.enter_initialization_mode().expect("allowed");
+    let r = i.exit_initialization_mode();
+    assert_eq!(i.finish(Call::ExitInitializationMode, r), Status::Error);
+    let msg = log
+        .borrow()
+        .last()
+        .map(|(_, m)| m.clone())
+        .unwrap_or_default();
+    assert!(
+        msg.contains("`sigma_depth`") && msg.contains("[1e-9, 1]"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn an_absurd_input_skips_its_measurement_with_a_warning_naming_it() {
+    let (mut i, log) = initialized();
+    contact(&mut i, 0.0, [1e-3, 2e-3], [0.0, 0.0]);
+    let before = outputs(&i);
+    set_reals(&mut i, &["tcp.z"], &[2e19]).expect("stored");
+    set_bool(&mut i, "contact", true);
+    assert_eq!(i.do_step(1.0, 0.1).expect("step"), Status::Warning);
+    assert_eq!(outputs(&i), before);
+    assert!(
+        log.borrow()
+            .iter()
+            .any(|(s, m)| *s == Status::Warning && m.contains("tcp.z") && m.contains("beyond"))
+    );
+}
+
+#[test]
+fn a_fifo_or_a_device_as_map_or_vision_fails_initialization_without_waiting() {
+    let fifo = resources().join(format!("pipe-{:?}", std::thread::current().id()));
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success());
+    let fifo = fifo.to_str().expect("a UTF-8 path").to_owned();
+    for (map, vision, want) in [
+        (fifo.as_str(), "", "a FIFO (named pipe)"),
+        ("/dev/zero", "", "a character device"),
+        ("peg.ftmap", fifo.as_str(), "a FIFO (named pipe)"),
+        ("peg.ftmap", "/dev/zero", "a character device"),
+    ] {
+        let (mut i, _) = instance();
+        set_string(&mut i, "map", map).expect("parameter");
+        set_string(&mut i, "vision", vision).expect("parameter");
+        i.enter_initialization_mode().expect("allowed");
+        let e = i
+            .exit_initialization_mode()
+            .expect_err("not a regular file");
+        let line = crate::error::report(&e);
+        assert!(
+            line.contains(want) && line.contains("not a regular file"),
+            "{line}"
+        );
+    }
+    std::fs::remove_file(&fifo).ok();
+}
+
+#[test]
+fn two_hundred_instances_on_eight_threads_share_one_map_and_match_a_serial_run() {
+    let run = |k: usize| {
+        let (mut i, _) = instance();
+        set_string(&mut i, "map", "peg.ftmap").expect("parameter");
+        set_int(&mut i, "particles", 300).expect("parameter");
+        set_int(&mut i, "seed", (k % 7) as i32).expect("parameter");
+        i.enter_initialization_mode().expect("allowed");
+        i.exit_initialization_mode().expect("initializes");
+        contact(&mut i, 0.0, [1e-3, -2e-3], [0.0, 0.0]);
+        contact(&mut i, 1.0, [1e-3, -2e-3], [0.5e-3, -1e-3]);
+        outputs(&i)
+    };
+    let serial: Vec<_> = (0..200).map(run).collect();
+    let mut parallel: Vec<(usize, Vec<(String, f64)>)> = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..8)
+            .map(|t| s.spawn(move || (t..200).step_by(8).map(|k| (k, run(k))).collect::<Vec<_>>()))
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| w.join().expect("a worker ends"))
+            .collect()
+    });
+    parallel.sort_by_key(|(k, _)| *k);
+    let parallel: Vec<_> = parallel.into_iter().map(|(_, o)| o).collect();
+    assert_eq!(serial, parallel, "bit-identical to the serial run");
+    // Instances alive together read one copy of the map.
+    let (a, _) = initialized();
+    let (b, _) = initialized();
+    let lookup = |i: &Instance| i.filter.as_ref().expect("initialized").lookup().clone();
+    assert!(Arc::ptr_eq(&lookup(&a), &lookup(&b)));
 }
