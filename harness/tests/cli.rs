@@ -46,6 +46,31 @@ fn an_fmu_refusal_says_what_the_fmu_logged() {
 }
 
 #[test]
+fn counts_and_sizes_out_of_range_are_refused_by_flag() {
+    for (args, flag) in [
+        (
+            &["trials", "--task", "peg_in_hole", "--trials", "0"][..],
+            "--trials",
+        ),
+        (&["sweep", "--task", "peg_in_hole", "--grid", "0"], "--grid"),
+        (
+            &["scan", "--task", "peg_in_hole", "--out", "x", "--step=-0.1"],
+            "--step",
+        ),
+        (&["boundary", "--directions", "0"], "--directions"),
+        (
+            &["trials", "--task", "peg_in_hole", "--max-sim-time", "nan"],
+            "--max-sim-time",
+        ),
+    ] {
+        let out = harness().args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} ran");
+        assert!(err.contains(&format!("for '{flag}")), "{args:?}: {err}");
+    }
+}
+
+#[test]
 fn a_missing_fmu_names_cargo_xtask_fmu() {
     let dir = std::env::temp_dir().join(format!("harness-nofmu-{}", std::process::id()));
     let out = harness()

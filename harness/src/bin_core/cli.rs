@@ -38,7 +38,7 @@ pub enum Command {
         #[arg(long, default_value = "0,0", allow_hyphen_values = true)]
         tcp_mm: String,
         /// Gaussian image noise (grey levels) added before detection.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
         noise: f64,
         /// Seed of the noise.
         #[arg(long, default_value_t = 1)]
@@ -47,7 +47,7 @@ pub enum Command {
         #[arg(long, value_enum, default_value_t = DetectorArg::Gradient)]
         detector: DetectorArg,
         /// Only time the detection (both detectors) on this many noisy copies of the image.
-        #[arg(long)]
+        #[arg(long, value_parser = count)]
         bench: Option<usize>,
     },
     /// Write (or check) models_mjcf/<task>/scene.xml from the task's task.toml.
@@ -65,10 +65,10 @@ pub enum Command {
         #[command(flatten)]
         run: RunArgs,
         /// Number of trials.
-        #[arg(long, default_value_t = 20)]
+        #[arg(long, default_value_t = 20, value_parser = count)]
         trials: usize,
         /// Half width of the square of true offsets (mm); default: Omega's size_trans.
-        #[arg(long)]
+        #[arg(long, value_parser = positive)]
         range_mm: Option<f64>,
     },
     /// Trials on a grid of true offsets; plots contacts per offset (the paper's Fig. 10).
@@ -77,10 +77,10 @@ pub enum Command {
         #[command(flatten)]
         run: RunArgs,
         /// Grid points per axis.
-        #[arg(long, default_value_t = 11)]
+        #[arg(long, default_value_t = 11, value_parser = count)]
         grid: usize,
         /// Half width of the grid (mm); default: Omega's size_trans.
-        #[arg(long)]
+        #[arg(long, value_parser = positive)]
         range_mm: Option<f64>,
     },
     /// Measure an FT-Map by contact motions in MuJoCo (model `Measured`).
@@ -92,10 +92,10 @@ pub enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Grid step (mm).
-        #[arg(long, default_value_t = 0.1)]
+        #[arg(long, default_value_t = 0.1, value_parser = positive)]
         step: f64,
         /// Half width of the scanned square (mm); default: Omega's size_trans.
-        #[arg(long)]
+        #[arg(long, value_parser = positive)]
         size: Option<f64>,
     },
     /// Where each scene accepts part A (a centred contact motion, part B moved off by
@@ -105,7 +105,7 @@ pub enum Command {
         #[arg(long)]
         task: Option<String>,
         /// Directions over a half turn.
-        #[arg(long, default_value_t = 8)]
+        #[arg(long, default_value_t = 8, value_parser = count)]
         directions: usize,
     },
     /// Two campaigns side by side (their trials.csv): contacts, contact measurements, y
@@ -194,7 +194,7 @@ pub struct RunArgs {
     #[arg(long)]
     pub sigma_vision: Option<f64>,
     /// Gaussian image noise (grey levels) added to each rendered image.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = non_negative)]
     pub image_noise: f64,
     /// Line detector for the camera's edges.
     #[arg(long, value_enum, default_value_t = DetectorArg::Gradient)]
@@ -213,10 +213,10 @@ pub struct RunArgs {
     #[arg(long, env = "FTFUSION_FMU")]
     pub fmu: Option<PathBuf>,
     /// Most contact motions per trial (default: 30 for pf; enough to cover Omega for spiral).
-    #[arg(long)]
+    #[arg(long, value_parser = count)]
     pub max_contacts: Option<usize>,
     /// Most simulated time per trial (s; default: 0.3 s per allowed contact).
-    #[arg(long)]
+    #[arg(long, value_parser = positive)]
     pub max_sim_time: Option<f64>,
     /// FMU parameter `particles`.
     #[arg(long)]
@@ -262,6 +262,33 @@ impl From<VisionMethodArg> for VisionMethod {
             VisionMethodArg::Relative => Self::Relative,
             VisionMethodArg::Recalibration => Self::Recalibration,
         }
+    }
+}
+
+/// A count given on the command line: a whole number >= 1.
+fn count(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// A size given on the command line: a finite number > 0.
+fn positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) => Err(format!("{v} must be a finite number > 0")),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// An amount given on the command line: a finite number >= 0.
+fn non_negative(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        Ok(v) => Err(format!("{v} must be a finite number >= 0")),
+        Err(e) => Err(e.to_string()),
     }
 }
 
