@@ -281,7 +281,10 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     }
     // SAFETY: `c` came from Box::into_raw in fmi2Instantiate and is freed once.
     let comp = unsafe { Box::from_raw(c as *mut Component) };
-    let _ = catch_unwind(AssertUnwindSafe(move || drop(comp)));
+    let _ = catch_unwind(AssertUnwindSafe(move || {
+        drop(comp);
+        crate::shared::release_unused();
+    }));
 }
 
 /// fmi2SetDebugLogging.

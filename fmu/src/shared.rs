@@ -46,6 +46,18 @@ pub fn map(path: &Path) -> Result<Arc<Lookup>> {
     Ok(lookup)
 }
 
+/// Drops the table once no instance holds a map: an FMU unloaded after its last instance
+/// was freed leaves no allocation behind.
+pub fn release_unused() {
+    let mut maps = MAPS.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(table) = maps.as_mut() {
+        table.retain(|_, (_, weak)| weak.strong_count() > 0);
+        if table.is_empty() {
+            *maps = None;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

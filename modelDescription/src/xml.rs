@@ -15,19 +15,24 @@ const GUID_PLACEHOLDER: &str = "{00000000-0000-0000-0000-000000000000}";
 /// The GUID of this interface: a UUID-shaped SHA-256 of the description rendered with a
 /// placeholder GUID (stable across builds, different for every change of the table).
 pub fn guid() -> &'static str {
-    static GUID: OnceLock<String> = OnceLock::new();
-    GUID.get_or_init(|| {
+    // Kept inline, not on the heap: an FMU unloaded by its importer leaves no allocation.
+    static GUID: OnceLock<[u8; GUID_PLACEHOLDER.len()]> = OnceLock::new();
+    let bytes = GUID.get_or_init(|| {
         let h = Sha256::digest(render(GUID_PLACEHOLDER).as_bytes());
         let hex: String = h.iter().take(16).map(|b| format!("{b:02x}")).collect();
-        format!(
+        let text = format!(
             "{{{}-{}-{}-{}-{}}}",
             &hex[0..8],
             &hex[8..12],
             &hex[12..16],
             &hex[16..20],
             &hex[20..32]
-        )
-    })
+        );
+        text.as_bytes()
+            .try_into()
+            .expect("a GUID is as long as its placeholder")
+    });
+    std::str::from_utf8(bytes).expect("ASCII")
 }
 
 /// The complete `modelDescription.xml`.
