@@ -219,6 +219,31 @@ fn bad_input_gets_an_error_that_names_the_problem() {
     std::fs::write(&map, &bytes[..n / 2]).unwrap();
     let out = ftmap(&["info", map.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("truncated"));
+    // A header whose cell count wraps the size (one axis of 2^60 cells, 20 bytes of data,
+    // the checksum right): refused by `info` and `export-csv` alike, naming the problem.
+    let json = format!(
+        "{{\"kind\":\"ftmap\",\"grid\":{{\"axes\":[{{\"dof\":\"object.x\",\"min\":0.0,\"step\":1e-16,\"count\":{}}}]}},\"channels\":[\"fx\",\"fy\",\"fz\",\"tx\",\"ty\",\"tz\",\"depth\"],\"units\":[\"N\",\"N\",\"N\",\"N.m\",\"N.m\",\"N.m\",\"m\"],\"meta\":{{\"task\":\"t\",\"model\":\"centroid\",\"approach\":[0.0,0.0,-1.0],\"force\":50.0,\"friction\":0.3,\"sensor_origin\":[0.0,0.0,0.06],\"pixel\":0.0001,\"sources\":[],\"generator\":\"t\"}}}}",
+        1u64 << 60
+    );
+    let mut wrap = b"FTMAP\0\r\n".to_vec();
+    wrap.extend_from_slice(&1u32.to_le_bytes());
+    wrap.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    wrap.extend_from_slice(json.as_bytes());
+    wrap.extend_from_slice(&[0u8; 20]);
+    let crc = crc32fast::hash(&wrap);
+    wrap.extend_from_slice(&crc.to_le_bytes());
+    std::fs::write(&map, &wrap).unwrap();
+    for cmd in [&["info"][..], &["export-csv", "--out", "/dev/null"]] {
+        let mut args = cmd.to_vec();
+        args.insert(1, map.to_str().unwrap());
+        let out = ftmap(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(
+            err.contains("more than a map file may hold") && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+    }
     std::fs::remove_dir_all(dir).ok();
     std::fs::remove_dir_all(dir2).ok();
 }
