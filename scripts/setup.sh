@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything ftfusion needs on a fresh Debian bookworm machine, idempotently:
-# apt packages, the pinned Python packages, and the MuJoCo 3.17.0 shared library (taken
-# from the official PyPI wheel) into .deps/mujoco/ for mujoco-rs.
+# apt packages, the pinned Python packages, zig (PyPI package ziglang) and cargo-zigbuild
+# (cargo xtask fmu links the FMU against glibc 2.17 with them), and the MuJoCo 3.17.0
+# shared library (taken from the official PyPI wheel) into .deps/mujoco/ for mujoco-rs.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
@@ -13,6 +14,7 @@ apt_packages=(
   libfontconfig1-dev libfreetype-dev fonts-dejavu-core  # plot text
   libmujoco-dev                                  # MuJoCo 2.2.2: scene compatibility test
   libtbb12                                       # libcosimpy
+  valgrind                                       # scripts/memcheck.sh
 )
 missing=()
 for p in "${apt_packages[@]}"; do
@@ -25,7 +27,18 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-python3 -m pip install -q --disable-pip-version-check -r "$root/scripts/requirements.txt"
+# ziglang: the zig toolchain that cargo-zigbuild finds as `python3 -m ziglang` (0.14: with
+# zig 0.15+, cargo-zigbuild warns that bindgen may need clang 18; bookworm's libclang is 14).
+python3 -m pip install -q --disable-pip-version-check -r "$root/scripts/requirements.txt" \
+  "ziglang==0.14.1"
+
+# cargo-zigbuild: `cargo xtask fmu` builds the FMU for x86_64-unknown-linux-gnu.2.17, so that
+# it loads wherever glibc 2.17 or newer is (manylinux2014: RHEL/Rocky 8, Ubuntu 20.04).
+zigbuild_version=0.24.1
+if [ "$(cargo-zigbuild --version 2>/dev/null)" != "cargo-zigbuild $zigbuild_version" ]; then
+  echo "setup: installing cargo-zigbuild $zigbuild_version (cargo install, a few minutes)"
+  cargo install --quiet --locked cargo-zigbuild --version "$zigbuild_version"
+fi
 
 mj="$root/.deps/mujoco"
 if [ ! -f "$mj/libmujoco.so.3.17.0" ]; then

@@ -1,7 +1,9 @@
 //! Developer tasks of the ftfusion workspace, run as `cargo xtask <task>`:
-//! - `fmu`: builds `target/fmu/FtFusion.fmu` (release cdylib, modelDescription.xml, the
-//!   default `peg_in_hole` map in resources/, documentation/index.html);
-//! - `bench-filter`: the filter benchmark (Rust) next to the same update in NumPy.
+//! - `fmu`: builds `target/fmu/FtFusion.fmu` (release cdylib linked against glibc 2.17 with
+//!   `cargo zigbuild`, modelDescription.xml, the default `peg_in_hole` map in resources/,
+//!   documentation/index.html);
+//! - `bench-filter`: the filter benchmark (Rust) next to the same update in NumPy;
+//! - `fuzz --time S`: each target of `fmu/tests/fuzz.rs` for S seconds on fresh seeds.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -13,18 +15,63 @@ use model_description::{Causality, Start, VARIABLES};
 /// The task whose map the FMU carries by default.
 const DEFAULT_TASK: &str = "peg_in_hole";
 
+/// The FMU's Rust target, the host's (no other rustup target needed) ...
+const TRIPLE: &str = "x86_64-unknown-linux-gnu";
+/// ... linked by zig against the symbol versions of this glibc, the newest the binary may
+/// need (manylinux2014: RHEL/CentOS 7, Rocky 8 and Ubuntu 20.04 load it). `cargo zigbuild`
+/// takes it as a suffix of the target: `x86_64-unknown-linux-gnu.2.17`.
+const GLIBC: &str = "2.17";
+
+/// The pinned cargo-zigbuild that `scripts/setup.sh` installs.
+const ZIGBUILD: &str = "cargo-zigbuild 0.24.1";
+
+/// The shared library's exports as a linker-script VERSION command: the `fmi2*` functions
+/// and nothing else. zig keeps only the last `--version-script` it is given, which is
+/// `fmu/exports.map` (hiding `fmi-sys`'s `callback_log`), not rustc's export list, so
+/// without this every Rust symbol would be exported; a VERSION command in a `-T` script
+/// is merged with that version script.
+const EXPORTS: &str = "VERSION {\n  {\n    global:\n      fmi2*;\n    local:\n      *;\n  };\n}\n";
+
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
         Some("fmu") => fmu(),
         Some("bench-filter") => bench(&args[1..]),
+        Some("fuzz") => fuzz(&args[1..]),
         _ => {
             eprintln!(
-                "usage: cargo xtask fmu | cargo xtask bench-filter [--particles N] [--iterations K]"
+                "usage: cargo xtask fmu | cargo xtask bench-filter [--particles N] [--iterations K] | cargo xtask fuzz [--time SECONDS]"
             );
             bail!("unknown or missing task")
         }
     }
+}
+
+/// Runs each fuzz target (`fmu/tests/fuzz.rs`) for `--time` seconds (default 600) on fresh
+/// seeds, one after the other; fails naming the target and seed of a broken case.
+fn fuzz(args: &[String]) -> Result<()> {
+    let seconds: u64 = match args {
+        [] => 600,
+        [flag, s] if flag == "--time" => s
+            .parse()
+            .ok()
+            .filter(|&s| s > 0)
+            .with_context(|| format!("--time {s}: a whole number of seconds > 0"))?,
+        _ => bail!("usage: cargo xtask fuzz [--time SECONDS]"),
+    };
+    println!("xtask fuzz: each target for {seconds} s");
+    run(cargo()
+        .args([
+            "test",
+            "--release",
+            "-p",
+            "ftfusion",
+            "--test",
+            "fuzz",
+            "--",
+        ])
+        .args(["--nocapture", "--test-threads", "1"])
+        .env("FUZZ_SECONDS", seconds.to_string()))
 }
 
 /// The workspace root (the parent of this crate's folder).
@@ -55,9 +102,7 @@ fn cargo() -> Command {
 fn fmu() -> Result<()> {
     let root = root();
     let target = root.join("target");
-    println!("xtask fmu: building the FtFusion shared library (release)");
-    run(cargo().args(["build", "--release", "-p", "ftfusion", "--lib"]))?;
-    let so = target.join("release/libftfusion.so");
+    let so = build_library(&target)?;
     // The line tables of the release profile are for developers: strip them from the FMU.
     let stripped = target.join("fmu/FtFusion.so");
     std::fs::create_dir_all(target.join("fmu"))?;
@@ -107,6 +152,52 @@ fn fmu() -> Result<()> {
         model_description::guid()
     );
     Ok(())
+}
+
+/// Builds the FMU's shared library for [`TRIPLE`] and [`GLIBC`] with `cargo zigbuild`
+/// (`cargo rustc` with zig as the linker, so that the export script reaches only the
+/// cdylib's link) and returns its path. No fallback to the host's linker: that binary would
+/// need the build machine's glibc.
+fn build_library(target: &Path) -> Result<PathBuf> {
+    let version = Command::new("cargo-zigbuild").arg("--version").output();
+    match version {
+        Ok(out) if out.status.success() => {
+            let found = String::from_utf8_lossy(&out.stdout).trim().to_owned();
+            if found != ZIGBUILD {
+                println!("xtask fmu: found {found}, scripts/setup.sh installs {ZIGBUILD}");
+            }
+        }
+        _ => bail!(
+            "cargo-zigbuild is not installed: run `bash scripts/setup.sh` (it installs \
+             {ZIGBUILD} and zig from the PyPI package ziglang, which link the FMU against \
+             glibc 2.17 so that it loads on older distributions)"
+        ),
+    }
+    let exports = target.join("fmu/fmi2-exports.ld");
+    std::fs::create_dir_all(target.join("fmu"))?;
+    if std::fs::read_to_string(&exports).ok().as_deref() != Some(EXPORTS) {
+        std::fs::write(&exports, EXPORTS)
+            .with_context(|| format!("writing {}", exports.display()))?;
+    }
+    let zig_target = format!("{TRIPLE}.{GLIBC}");
+    println!("xtask fmu: building the FtFusion shared library (release, {zig_target})");
+    let mut cmd = Command::new("cargo-zigbuild");
+    cmd.args([
+        "rustc",
+        "--release",
+        "-p",
+        "ftfusion",
+        "--lib",
+        "--crate-type",
+        "cdylib",
+    ])
+    .args(["--target", &zig_target, "--"])
+    .arg(format!("-Clink-arg=-Wl,-T,{}", exports.display()));
+    run(&mut cmd).context(
+        "cargo zigbuild failed (if it cannot find zig, run `bash scripts/setup.sh`: it \
+         installs the PyPI package ziglang)",
+    )?;
+    Ok(target.join(TRIPLE).join("release/libftfusion.so"))
 }
 
 /// The default task's map, computed with the CPU backend and cached in `cache` under the
