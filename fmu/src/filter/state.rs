@@ -151,10 +151,17 @@ impl Filter {
         let measurements = r.u32()?;
         let rng: Xoshiro256PlusPlus = serde_json::from_slice(r.bytes()?)
             .map_err(|e| FusionError::State(format!("random generator state: {e}")))?;
-        if let Some(v) = pos.iter().find(|v| !v.is_finite()) {
-            return Err(FusionError::State(format!(
-                "a particle's coordinate is {v}"
-            )));
+        // Particles live on Omega's grid: coordinates in [0, top] (grid units) per axis.
+        for (k, a) in self.lookup.axes().iter().enumerate() {
+            if let Some(v) = pos[k * n..(k + 1) * n]
+                .iter()
+                .find(|v| !(0.0..=a.top()).contains(*v))
+            {
+                return Err(FusionError::State(format!(
+                    "a particle's {} coordinate is {v} grid steps, outside Omega",
+                    a.dof
+                )));
+            }
         }
         // Normalised log-weights are <= 0 (to f32 rounding), -inf for a particle without
         // weight, and at least one is finite.

@@ -774,11 +774,12 @@ fn a_contact_resting_on_a_chamfer_says_how_far_off_it_is() {
 fn a_tampered_state_with_unnormalised_or_infinite_weights_is_refused() {
     let f = filter(21);
     type Tamper = fn(&mut Filter);
-    let cases: [(Tamper, &str); 4] = [
+    let cases: [(Tamper, &str); 5] = [
         (|f| f.lw[7] = f32::INFINITY, "log-weight is inf"),
         (|f| f.lw[7] = 3.0, "log-weight is 3"),
         (|f| f.lw.fill(f32::NEG_INFINITY), "no particle has weight"),
         (|f| f.pos[5] = f32::NAN, "coordinate is NaN"),
+        (|f| f.pos[5] = -0.5, "outside Omega"),
     ];
     for (tamper, want) in cases {
         let mut bad = f.clone();
