@@ -204,9 +204,9 @@ pub fn load_any(path: &Path) -> Result<(FtMap, Option<[usize; 2]>)> {
     };
     let hlen = hlen.min(u64::from(MAX_HEADER) + 1).min(size - 16);
     crate::file::read_more(&mut file, path, hlen, &mut bytes)?;
-    let (_, data_at, total) = prefix(&bytes, path, size)?;
+    let (header, data_at, total) = prefix(&bytes, path, size)?;
     crate::file::read_more(&mut file, path, total - data_at as u64, &mut bytes)?;
-    decode(&bytes, path)
+    body(&bytes, path, header, data_at)
 }
 
 /// Checks the fixed header and the JSON header at the start of `bytes` (a file of `size`
@@ -288,8 +288,19 @@ fn prefix(bytes: &[u8], path: &Path, size: u64) -> Result<(Header, usize, u64)> 
 
 /// Decodes the bytes of a map or shard file.
 pub fn decode(bytes: &[u8], path: &Path) -> Result<(FtMap, Option<[usize; 2]>)> {
-    let (header, data_at, total) = prefix(bytes, path, bytes.len() as u64)?;
-    let total = total as usize;
+    let (header, data_at, _) = prefix(bytes, path, bytes.len() as u64)?;
+    body(bytes, path, header, data_at)
+}
+
+/// The checksum and the data of a whole file's `bytes` whose prefix (`header`, data from
+/// `data_at`) [`prefix`] has checked against their length.
+fn body(
+    bytes: &[u8],
+    path: &Path,
+    header: Header,
+    data_at: usize,
+) -> Result<(FtMap, Option<[usize; 2]>)> {
+    let total = bytes.len();
     let p = || path.to_owned();
     let bad = |reason: String| MapError::BadHeader { path: p(), reason };
     let stored = u32::from_le_bytes(bytes[total - 4..].try_into().expect("4 bytes"));
