@@ -11,6 +11,7 @@ use ftmap::Task;
 use crate::error::{HarnessError, Result};
 use crate::scene::SERVO_KP;
 use crate::sim::Sim;
+use crate::world::World;
 
 /// The bisection stops when the bracket is this narrow (m).
 pub const RESOLUTION: f64 = 1.0e-6;

@@ -22,9 +22,10 @@ use crate::fmu_driver::{Fmu, Settings, default_fmu_path};
 use crate::plot;
 use crate::report::{self, Summary};
 use crate::sensor::Noise;
-use crate::sim::{Sim, open_task};
+use crate::sim::Sim;
 use crate::trial::{Strategy, TrialConfig, TrialResult, run_trial, spiral};
 use crate::vision::Detector;
+use crate::world::{MapWorld, World, WorldKind};
 
 /// How the FMU evaluates particles by vision (its `vision_method` parameter).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -113,6 +114,8 @@ pub struct CampaignOptions {
     pub sigma_depth: Option<f64>,
     /// FMU parameter `mismatch` (share of the measured force's and torque's magnitudes).
     pub mismatch: Option<f64>,
+    /// Where the contact motions happen.
+    pub world: WorldKind,
 }
 
 /// What setting a campaign up did that its user should hear of, in order.
@@ -201,7 +204,7 @@ impl fmt::Display for CampaignPlot {
 pub struct Campaign {
     options: CampaignOptions,
     task: Task,
-    sim: Sim,
+    world: Box<dyn World>,
     config: TrialConfig,
     eye: Option<Eye>,
     fmu: Option<Fmu>,
@@ -216,8 +219,19 @@ impl Campaign {
     /// When the task, its scene, map, camera or the FMU cannot be had, or the camera is asked
     /// for with the spiral search.
     pub fn open(options: CampaignOptions, note: &mut dyn FnMut(SetupNote)) -> Result<Self> {
-        let (task, sim) = open_task(&options.task)?;
+        let task = Task::find(&options.task)?;
         let map = resolve_map(options.map.as_deref(), &task, note)?;
+        let world: Box<dyn World> = match &options.world {
+            WorldKind::Mujoco => Box::new(Sim::of_task(&task)?),
+            WorldKind::Map(file) => {
+                let file = match file.as_ref().or(map.as_ref()) {
+                    Some(f) => f.clone(),
+                    None => cached_map(&task, note)?,
+                };
+                let (world_map, _) = format::load_any(&file)?;
+                Box::new(MapWorld::new(world_map, task.geometry()?.clone())?)
+            }
+        };
         let mut config = trial_config(&options, &task, map)?;
         let eye = open_eye(&options, &task, &mut config, note)?;
         let fmu = match options.strategy {
@@ -230,7 +244,7 @@ impl Campaign {
         Ok(Self {
             options,
             task,
-            sim,
+            world,
             config,
             eye,
             fmu,
@@ -261,7 +275,7 @@ impl Campaign {
         let offsets = self.offsets();
         let (results, wall) = timed(|| {
             run_campaign(
-                &mut self.sim,
+                self.world.as_mut(),
                 self.fmu.as_ref(),
                 self.eye.as_mut(),
                 &self.config,
@@ -289,6 +303,7 @@ impl Campaign {
         )?;
         let summary = report::summarize(
             &self.task.name,
+            &self.options.world,
             self.options.strategy,
             self.options.sensor_noise,
             self.options.vision,
@@ -346,20 +361,7 @@ fn resolve_map(
     let map = match map {
         Some(m) => Some(std::path::absolute(m).map_err(|e| HarnessError::io(m, e))?),
         None if task.name == "peg_in_hole" => None,
-        None => {
-            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
-            let t0 = Instant::now();
-            let (path, computed) =
-                ftmap::generate::cached(task, &dir).map_err(|source| HarnessError::TaskMap {
-                    task: task.name.clone(),
-                    source,
-                })?;
-            note(SetupNote::Map {
-                path: path.clone(),
-                computed: computed.then(|| t0.elapsed().as_secs_f64()),
-            });
-            Some(path)
-        }
+        None => Some(cached_map(task, note)?),
     };
     match map {
         Some(m) if !m.is_file() => Err(HarnessError::MapMissing {
@@ -386,6 +388,23 @@ fn resolve_map(
             Ok(map)
         }
     }
+}
+
+/// The task's FT-Map computed from its CAD meshes, from the cache in target/maps/ when it
+/// is there.
+fn cached_map(task: &Task, note: &mut dyn FnMut(SetupNote)) -> Result<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
+    let t0 = Instant::now();
+    let (path, computed) =
+        ftmap::generate::cached(task, &dir).map_err(|source| HarnessError::TaskMap {
+            task: task.name.clone(),
+            source,
+        })?;
+    note(SetupNote::Map {
+        path: path.clone(),
+        computed: computed.then(|| t0.elapsed().as_secs_f64()),
+    });
+    Ok(path)
 }
 
 /// The trial limits and FMU settings of a campaign, with the FT-Map file `map`.
@@ -489,7 +508,7 @@ pub fn grid_offsets(k: usize, size: f64) -> Vec<[f64; 2]> {
 /// # Errors
 /// When the FMU or rendering fails.
 pub fn run_campaign(
-    sim: &mut Sim,
+    sim: &mut dyn World,
     fmu: Option<&Fmu>,
     mut eye: Option<&mut Eye>,
     cfg: &TrialConfig,

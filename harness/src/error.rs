@@ -100,6 +100,9 @@ pub enum HarnessError {
         /// The task it should be computed for.
         task: String,
     },
+    /// A map cannot serve as the world of a campaign.
+    #[error("the map world: {0}")]
+    MapWorld(String),
     /// The task has no camera (no `[camera]` table) but the camera was asked for.
     #[error(
         "vision: task {task} has no camera (a [camera] table in its task.toml; bearing_housing has one)"

@@ -2,7 +2,8 @@
 //! Modules, from the simulated world up:
 //!
 //! - [`runtime`], the MuJoCo version check, and [`error`], the [`HarnessError`] type;
-//! - [`scene`], MJCF scenes from `task.toml`; [`sim`], the work cell's contact motions;
+//! - [`world`], where a trial's contact motions happen (MuJoCo or the FT-Map itself);
+//!   [`scene`], MJCF scenes from `task.toml`; [`sim`], the MuJoCo work cell's contact motions;
 //!   [`sensor`], the F/T reading in the map's convention and its noise;
 //! - [`camera`], the calibrated camera and headless rendering; [`vision`], the camera
 //!   pipeline (image primitives, the gradient and Hough line detectors, features);
@@ -33,5 +34,6 @@ pub mod sensor;
 pub mod sim;
 pub mod trial;
 pub mod vision;
+pub mod world;
 
 pub use error::{HarnessError, Result};

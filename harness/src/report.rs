@@ -8,6 +8,7 @@ use serde::Serialize;
 use crate::calibration::{self, Calibration, Sample};
 use crate::error::{HarnessError, Result};
 use crate::trial::{Strategy, TrialResult};
+use crate::world::WorldKind;
 
 /// Statistics of a count per trial.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -27,6 +28,8 @@ pub struct ContactStats {
 pub struct Summary {
     /// Task name.
     pub task: String,
+    /// Where the contact motions happened.
+    pub world: WorldKind,
     /// Strategy.
     pub strategy: Strategy,
     /// Trials run.
@@ -88,6 +91,7 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
 /// Summarises trial results.
 pub fn summarize(
     task: &str,
+    world: &WorldKind,
     strategy: Strategy,
     sensor_noise: bool,
     vision: bool,
@@ -101,6 +105,7 @@ pub fn summarize(
     let trial_wall: f64 = results.iter().map(|r| r.wall).sum();
     Summary {
         task: task.to_owned(),
+        world: world.clone(),
         strategy,
         trials: results.len(),
         success_rate: results.iter().filter(|r| r.success).count() as f64 / n,
@@ -135,6 +140,14 @@ impl Summary {
         let mm = |m: f64| format!("{:.3} mm", m * 1e3);
         let rows = [
             ("task", self.task.clone()),
+            (
+                "world",
+                match &self.world {
+                    WorldKind::Mujoco => "MuJoCo".to_owned(),
+                    WorldKind::Map(Some(file)) => format!("the map {}", file.display()),
+                    WorldKind::Map(None) => "the FMU's map".to_owned(),
+                },
+            ),
             ("strategy", format!("{:?}", self.strategy).to_lowercase()),
             (
                 "sensor noise",
@@ -203,10 +216,13 @@ impl Summary {
             ),
             (
                 "real-time factor (MuJoCo / whole loop)",
-                format!(
-                    "{:.1} x / {:.1} x",
-                    self.realtime_factor, self.realtime_factor_overall
-                ),
+                match self.world {
+                    WorldKind::Mujoco => format!(
+                        "{:.1} x / {:.1} x",
+                        self.realtime_factor, self.realtime_factor_overall
+                    ),
+                    WorldKind::Map(_) => "n/a (nothing simulated)".to_owned(),
+                },
             ),
         ];
         let w = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);

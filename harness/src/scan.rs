@@ -12,6 +12,7 @@ use ftmap::{FtMap, Grid, GridAxis, MapMeta, NCH, SourceMesh, Task, WrenchModel};
 use crate::error::{HarnessError, Result, create_parent};
 use crate::sensor::map_wrench;
 use crate::sim::{Sim, open_task};
+use crate::world::World;
 
 /// What the `scan` command measures (SI units).
 #[derive(Debug, Clone, PartialEq)]

@@ -23,6 +23,7 @@ use mujoco_rs::prelude::*;
 
 use crate::error::{HarnessError, Result};
 use crate::scene::{APPROACH_CLEARANCE, SceneSpec, scene_path, write_scene};
+use crate::world::{Contact, World};
 
 /// Longest contact motion (s of simulated time) before it is reported as not settled.
 pub const MAX_TIME: f64 = 2.0;
@@ -44,21 +45,6 @@ pub const DROP_DEPTH: f64 = 0.00001;
 /// A contact motion ending with the task frame below this height above the goal has
 /// inserted part A (m).
 pub const SUCCESS_HEIGHT: f64 = 0.001;
-
-/// What one contact motion ends with.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Contact {
-    /// Raw sensor values: MuJoCo's force and torque sensors at site `ft`, in the site frame.
-    pub raw: [f64; 6],
-    /// Task frame position relative to the nominal goal frame at the end (m).
-    pub tcp: [f64; 3],
-    /// Whether the motion settled within [`MAX_TIME`].
-    pub settled: bool,
-    /// Whether part A settled on the goal: inserted.
-    pub inserted: bool,
-    /// Simulated time of the motion (s).
-    pub time: f64,
-}
 
 /// A loaded scene with its data, ready for contact motions.
 pub struct Sim {
@@ -146,28 +132,11 @@ impl Sim {
         &self.spec
     }
 
-    /// Places part B at the true object offset (x, y) relative to the nominal goal (m).
-    pub fn set_object(&mut self, xy: [f64; 2]) {
-        self.object = xy;
-    }
-
-    /// Total simulated time so far (s).
-    pub fn simulated(&self) -> f64 {
-        self.simulated
-    }
-
-    /// One contact motion: approach at the commanded task-frame position `xy` (relative to
-    /// the nominal goal) with the imposed force until the contact settles.
-    pub fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {
-        self.motion(xy, None)
-    }
-
-    /// A slide under force: a contact motion at `from`, then, still pressing, a straight
-    /// move to `to` at [`SLIDE_SPEED`] that stops where part A drops by [`DROP_DEPTH`] (the
-    /// edge found the hole: the carriage holds there and part A goes in), else settles at
-    /// `to`.
-    pub fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact {
-        self.motion(from, Some(to))
+    /// The normal force of each contact at the end of the last motion (N).
+    pub fn contact_loads(&self) -> Vec<f64> {
+        (0..self.data.ncon() as usize)
+            .map(|i| self.data.contact_force(i)[0])
+            .collect()
     }
 
     /// A contact motion at `xy`, then a slide to `slide`, if any.
@@ -251,6 +220,26 @@ impl Sim {
             inserted: settled && tcp[2] < SUCCESS_HEIGHT,
             time,
         }
+    }
+}
+
+impl World for Sim {
+    fn set_object(&mut self, xy: [f64; 2]) {
+        self.object = xy;
+    }
+
+    fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {
+        self.motion(xy, None)
+    }
+
+    /// The slide moves at [`SLIDE_SPEED`] and stops where part A drops by [`DROP_DEPTH`]
+    /// (the edge found the hole: the carriage holds there and part A goes in).
+    fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact {
+        self.motion(from, Some(to))
+    }
+
+    fn simulated(&self) -> f64 {
+        self.simulated
     }
 }
 

@@ -18,7 +18,7 @@ use crate::error::Result;
 use crate::eye::Eye;
 use crate::fmu_driver::{Estimate, Fmu, Settings};
 use crate::sensor::{Noise, map_wrench};
-use crate::sim::Sim;
+use crate::world::World;
 
 /// How the next approach point is chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -174,7 +174,7 @@ pub fn spiral(step: f64, radius: f64) -> Vec<[f64; 2]> {
 /// # Errors
 /// When the FMU or rendering fails.
 pub fn run_trial(
-    sim: &mut Sim,
+    sim: &mut dyn World,
     fmu: Option<&Fmu>,
     mut eye: Option<&mut Eye>,
     cfg: &TrialConfig,

@@ -4,6 +4,7 @@ mod common;
 
 use harness::sensor::map_wrench;
 use harness::sim::SUCCESS_HEIGHT;
+use harness::world::World;
 
 #[test]
 fn a_peg_pressed_on_the_plate_reads_plus_the_imposed_force() {

@@ -4,6 +4,7 @@
 #[path = "../../tests/prerequisite.rs"]
 mod prerequisite;
 
+use harness::world::World;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

@@ -4,6 +4,8 @@
 
 mod common;
 
+use harness::world::World;
+
 #[test]
 fn a_slide_drops_in_where_it_crosses_the_hole_and_not_beside_it() {
     let (task, mut sim) = common::peg();

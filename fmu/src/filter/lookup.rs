@@ -62,9 +62,8 @@ pub struct Lookup {
     task: String,
     axes: Vec<MapAxis>,
     cells: Vec<[f32; LANES]>,
-    has_depth: bool,
-    /// Lowest and highest value of the depth channel.
-    depth_range: [f32; 2],
+    /// Lowest and highest value of the depth channel, when it holds values.
+    depth_range: Option<[f32; 2]>,
     approach: [f64; 3],
     clearance: Option<f64>,
     /// Largest force and torque magnitudes over the map's cells.
@@ -108,8 +107,6 @@ impl Lookup {
             })
             .collect();
         let mut cells = Vec::with_capacity(grid.cells());
-        let mut depth_seen = false;
-        let mut depth_range = [f32::INFINITY, f32::NEG_INFINITY];
         let mut largest = [0.0f64; 2];
         for i in 0..grid.cells() {
             let c = map.cell(i);
@@ -119,14 +116,9 @@ impl Lookup {
                     ftmap::CHANNELS[ch]
                 )));
             }
-            depth_seen |= c[NCH - 1] != 0.0;
             for (l, v) in largest.iter_mut().zip([&c[..3], &c[3..6]]) {
                 *l = l.max(f64::from(v.iter().map(|x| x * x).sum::<f32>().sqrt()));
             }
-            depth_range = [
-                depth_range[0].min(c[NCH - 1]),
-                depth_range[1].max(c[NCH - 1]),
-            ];
             let mut padded = [0.0; LANES];
             padded[..NCH].copy_from_slice(c);
             padded[CONTACT] = 1.0;
@@ -136,8 +128,7 @@ impl Lookup {
             task: map.meta().task.clone(),
             axes,
             cells,
-            has_depth: depth_seen,
-            depth_range,
+            depth_range: map.depth_range(),
             approach: map.meta().approach,
             clearance: map.meta().clearance,
             largest,
@@ -184,19 +175,21 @@ impl Lookup {
 
     /// True when the depth channel holds values (not all zero).
     pub fn has_depth(&self) -> bool {
-        self.has_depth
+        self.depth_range.is_some()
     }
 
     /// Whether a contact at `height` (m) went in: below the middle of the depth channel's
     /// range (between resting on part B and inserted); never on a map without depth.
     pub fn inserted(&self, height: f64) -> bool {
-        self.has_depth && height < 0.5 * f64::from(self.depth_range[0] + self.depth_range[1])
+        self.depth_range
+            .is_some_and(|[lo, hi]| height < 0.5 * f64::from(lo + hi))
     }
 
     /// Whether a contact at `height` (m) rests more than `slack` below the highest contact
     /// the map holds (part B's top face): on a chamfer or another slope.
     pub fn below_top(&self, height: f64, slack: f64) -> bool {
-        self.has_depth && height < f64::from(self.depth_range[1]) - slack
+        self.depth_range
+            .is_some_and(|[_, hi]| height < f64::from(hi) - slack)
     }
 
     /// Height of a TCP position against the approach vector (the contact height at a contact).

@@ -8,6 +8,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use harness::campaign::{CampaignOptions, Offsets, VisionMethod};
 use harness::trial::Strategy;
 use harness::vision::Detector;
+use harness::world::WorldKind;
 
 /// MuJoCo validation harness of ftfusion: scenes, closed-loop trials through FtFusion.fmu,
 /// measured maps.
@@ -236,6 +237,24 @@ pub struct RunArgs {
     /// FMU parameter `mismatch` (share of the measured force's and torque's magnitudes).
     #[arg(long)]
     pub mismatch: Option<f64>,
+    /// Where the contact motions happen: the task's MuJoCo scene, or a world that is the
+    /// FT-Map itself (the map's wrench at the true offset, part A going in where the
+    /// geometry says).
+    #[arg(long, value_enum, default_value_t = WorldArg::Mujoco)]
+    pub world: WorldArg,
+    /// The map that answers the contacts in the map world (default: the FMU's map), e.g. a
+    /// measured map (`harness scan`) against the computed one the FMU reads.
+    #[arg(long, requires = "world")]
+    pub world_map: Option<PathBuf>,
+}
+
+/// Where a campaign's contact motions happen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum WorldArg {
+    /// The task's MuJoCo scene.
+    Mujoco,
+    /// The FT-Map itself.
+    Map,
 }
 
 impl From<DetectorArg> for Detector {
@@ -323,6 +342,10 @@ impl RunArgs {
             sigma_force: self.sigma_force,
             sigma_depth: self.sigma_depth,
             mismatch: self.mismatch,
+            world: match self.world {
+                WorldArg::Mujoco => WorldKind::Mujoco,
+                WorldArg::Map => WorldKind::Map(self.world_map),
+            },
         }
     }
 }

@@ -134,14 +134,57 @@ impl FtMap {
 
     /// Multilinear interpolation of all channels at `coords` (clamped into the grid).
     pub fn interpolate(&self, coords: &[f64]) -> Result<[f64; NCH]> {
+        Ok(self.interpolate_over(coords, |_| true)?.0)
+    }
+
+    /// The lowest and highest contact depth over the cells, when the depth channel holds
+    /// values (not all zero).
+    pub fn depth_range(&self) -> Option<[f32; 2]> {
+        let depths = || self.data.iter().skip(NCH - 1).step_by(NCH);
+        depths().any(|&d| d != 0.0).then(|| {
+            depths().fold([f32::INFINITY, f32::NEG_INFINITY], |r, &d| {
+                [r[0].min(d), r[1].max(d)]
+            })
+        })
+    }
+
+    /// The channels of a contact at `coords`: multilinear over the surrounding cells where
+    /// part A rests on part B, leaving out the cells where it went in (their wrench says
+    /// nothing about a contact); plain [`FtMap::interpolate`] where every corner went in.
+    pub fn interpolate_contact(&self, coords: &[f64]) -> Result<[f64; NCH]> {
+        let Some([lo, hi]) = self.depth_range() else {
+            return self.interpolate(coords);
+        };
+        let middle = 0.5 * (lo + hi);
+        match self.interpolate_over(coords, |c| c[NCH - 1] >= middle)? {
+            (contact, total) if total > 0.0 => Ok(contact),
+            _ => self.interpolate(coords),
+        }
+    }
+
+    /// Multilinear interpolation at `coords` over the corners `keep` accepts, renormalised
+    /// over them, and the sum of their weights (zeros and 0 when it accepts none).
+    fn interpolate_over(
+        &self,
+        coords: &[f64],
+        keep: impl Fn(&[f32; NCH]) -> bool,
+    ) -> Result<([f64; NCH], f64)> {
         self.grid.check_len(coords)?;
         let mut out = [0.0; NCH];
+        let mut total = 0.0;
         self.grid.for_each_corner(coords, |cell, w| {
-            for (o, v) in out.iter_mut().zip(self.cell(cell)) {
-                *o += w * f64::from(*v);
+            let c = self.cell(cell);
+            if keep(c) {
+                total += w;
+                for (o, v) in out.iter_mut().zip(c) {
+                    *o += w * f64::from(*v);
+                }
             }
         });
-        Ok(out)
+        if total > 0.0 {
+            out.iter_mut().for_each(|o| *o /= total);
+        }
+        Ok((out, total))
     }
 }
 
@@ -205,6 +248,25 @@ pub(crate) mod tests {
         // x^2 between samples 0 and 1e-3 interpolates linearly: 0.5e-6 at 0.5e-3.
         assert!((mid[6] - 0.5e-6).abs() < 1e-12);
         assert!(map.interpolate(&[0.0]).is_err());
+        let [lo, hi] = map.depth_range().unwrap();
+        assert!(lo == 0.0 && (hi - 4e-6).abs() < 1e-12, "{lo} {hi}");
         assert_eq!(map.nearest(&[0.4e-3, 0.6e-3]).unwrap()[3], 1.0);
+    }
+
+    #[test]
+    fn a_contact_leaves_out_the_cells_where_part_a_went_in() {
+        // Depth x^2 over x in [-2, 2] mm: the middle of its range is 2e-6, so only the
+        // columns x = ±2 mm are contacts.
+        let map = sample_map();
+        let c = map.interpolate_contact(&[1.5e-3, 0.0]).unwrap();
+        assert!(
+            (c[4] + 2.0).abs() < 1e-6,
+            "the x = 2 mm column alone: {c:?}"
+        );
+        let plain = map.interpolate(&[1.5e-3, 0.0]).unwrap();
+        assert!((plain[4] + 1.5).abs() < 1e-6, "{plain:?}");
+        // Every corner went in: plain interpolation.
+        let inside = map.interpolate_contact(&[0.5e-3, 0.0]).unwrap();
+        assert_eq!(inside, map.interpolate(&[0.5e-3, 0.0]).unwrap());
     }
 }

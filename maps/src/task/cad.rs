@@ -347,6 +347,12 @@ impl Geometry {
         }
     }
 
+    /// Whether part A goes in with part B at `offset` (x, y, m, goal frame) off the TCP, by
+    /// the geometry: within the insertion limit of its direction.
+    pub fn inserts(&self, offset: [f64; 2]) -> bool {
+        offset[0].hypot(offset[1]) <= self.insertion_limit(offset[1].atan2(offset[0]))
+    }
+
     /// The smallest insertion limit over all directions, the fit's radial clearance (m):
     /// along +x, a flat normal of the octagon.
     pub fn clearance(&self) -> f64 {

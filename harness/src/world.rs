@@ -1,0 +1,152 @@
+//! Where a trial's contact motions happen: the MuJoCo work cell ([`crate::sim::Sim`]) or a
+//! world that is the FT-Map itself ([`MapWorld`]), which answers a contact with the map's
+//! wrench at the true offset and takes part A in where the geometry does. The map world
+//! measures the estimator and the strategy with no simulator between the map and the
+//! measurement (and runs a campaign in a fraction of MuJoCo's time).
+
+use ftmap::task::cad::Geometry;
+use ftmap::{Axis, FtMap, NCH, Pose};
+
+use crate::error::{HarnessError, Result};
+
+/// Which world a campaign's trials run in.
+#[derive(Debug, Clone, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WorldKind {
+    /// The task's MuJoCo scene.
+    #[default]
+    Mujoco,
+    /// An FT-Map file as the world: the given one, or the FMU's map when `None`.
+    Map(Option<std::path::PathBuf>),
+}
+
+/// What one contact motion ends with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// Raw sensor values: MuJoCo's force and torque sensors at site `ft`, in the site frame
+    /// (the negated wrench of the map's convention, [`crate::sensor::map_wrench`]).
+    pub raw: [f64; 6],
+    /// Task frame position relative to the nominal goal frame at the end (m).
+    pub tcp: [f64; 3],
+    /// Whether the motion settled.
+    pub settled: bool,
+    /// Whether part A settled on the goal: inserted.
+    pub inserted: bool,
+    /// Simulated time of the motion (s).
+    pub time: f64,
+}
+
+/// A work cell that runs contact motions against part B at a true offset.
+pub trait World {
+    /// Places part B at the true object offset (x, y) relative to the nominal goal (m).
+    fn set_object(&mut self, xy: [f64; 2]);
+
+    /// One contact motion: approach at the commanded task-frame position `xy` (relative to
+    /// the nominal goal) with the imposed force until the contact settles.
+    fn contact_motion(&mut self, xy: [f64; 2]) -> Contact;
+
+    /// A slide under force: a contact motion at `from`, then, still pressing, a straight
+    /// move to `to` that stops where part A drops into part B, else settles at `to`.
+    fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact;
+
+    /// Total simulated time so far (s); 0 for a world that does not simulate.
+    fn simulated(&self) -> f64;
+}
+
+/// Points a slide in the map world checks per radial clearance of the fit.
+const SLIDE_SAMPLES_PER_CLEARANCE: f64 = 8.0;
+
+/// The FT-Map as the world: a contact reads the map's wrench at the object's offset from the
+/// TCP (interpolated over the cells where part A rests on part B), at the map's contact
+/// depth; part A goes in where the task's geometry says it does.
+pub struct MapWorld {
+    map: FtMap,
+    geometry: Geometry,
+    object: [f64; 2],
+}
+
+impl MapWorld {
+    /// The world of `map` (over `object.x`, `object.y`) for parts of `geometry`.
+    ///
+    /// # Errors
+    /// [`HarnessError::MapWorld`] when the map's axes are not exactly `object.x`, `object.y`.
+    pub fn new(map: FtMap, geometry: Geometry) -> Result<Self> {
+        let is = |k: usize, axis| {
+            map.grid()
+                .axes()
+                .get(k)
+                .is_some_and(|a| a.dof.pose == Pose::Object && a.dof.axis == axis)
+        };
+        if map.grid().ndim() != 2 || !is(0, Axis::X) || !is(1, Axis::Y) {
+            return Err(HarnessError::MapWorld(format!(
+                "its axes are {}, the map world needs object.x, object.y",
+                map.grid()
+                    .axes()
+                    .iter()
+                    .map(|a| a.dof.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
+        Ok(Self {
+            map,
+            geometry,
+            object: [0.0; 2],
+        })
+    }
+
+    /// Part B's offset from a TCP at `xy` (m).
+    fn offset(&self, xy: [f64; 2]) -> [f64; 2] {
+        [self.object[0] - xy[0], self.object[1] - xy[1]]
+    }
+
+    /// The contact at `xy`: inserted (the task frame on the goal), or resting on part B
+    /// with the map's wrench and depth.
+    fn contact_at(&self, xy: [f64; 2]) -> Contact {
+        let offset = self.offset(xy);
+        let inserted = self.geometry.inserts(offset);
+        // The map's axes were checked: the coordinates fit its grid.
+        let cell = self.map.interpolate_contact(&offset).unwrap_or([0.0; NCH]);
+        let mut raw = [0.0; 6];
+        for (r, w) in raw.iter_mut().zip(&cell) {
+            *r = -w;
+        }
+        Contact {
+            raw,
+            tcp: [xy[0], xy[1], if inserted { 0.0 } else { cell[NCH - 1] }],
+            settled: true,
+            inserted,
+            time: 0.0,
+        }
+    }
+}
+
+impl World for MapWorld {
+    fn set_object(&mut self, xy: [f64; 2]) {
+        self.object = xy;
+    }
+
+    fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {
+        self.contact_at(xy)
+    }
+
+    fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact {
+        let len = (to[0] - from[0]).hypot(to[1] - from[1]);
+        let samples =
+            (len / self.geometry.clearance() * SLIDE_SAMPLES_PER_CLEARANCE).ceil() as usize;
+        (0..=samples)
+            .map(|k| {
+                let t = k as f64 / samples.max(1) as f64;
+                [
+                    from[0] + t * (to[0] - from[0]),
+                    from[1] + t * (to[1] - from[1]),
+                ]
+            })
+            .find(|&p| self.geometry.inserts(self.offset(p)))
+            .map_or_else(|| self.contact_at(to), |p| self.contact_at(p))
+    }
+
+    fn simulated(&self) -> f64 {
+        0.0
+    }
+}

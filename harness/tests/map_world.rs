@@ -1,0 +1,103 @@
+//! The world that is the FT-Map itself: a contact reads the map (over the cells where part
+//! A rests on part B), part A goes in exactly where the geometry says, a slide drops in at
+//! the first point of its line within the clearance; a map over other axes is refused.
+
+mod common;
+
+use ftmap::Task;
+use harness::sensor::map_wrench;
+use harness::world::{MapWorld, World};
+
+fn peg_world() -> (MapWorld, f64) {
+    let task = Task::find("peg_in_hole").expect("task peg_in_hole");
+    let geometry = task.geometry().expect("a [geometry]").clone();
+    let c = geometry.clearance();
+    let world = MapWorld::new(common::computed_peg_map().clone(), geometry).expect("x, y map");
+    (world, c)
+}
+
+#[test]
+fn a_contact_reads_the_map_and_goes_in_within_the_clearance() {
+    let (mut world, c) = peg_world();
+    let map = common::computed_peg_map();
+    let hole = [0.0021, -0.0013];
+    world.set_object(hole);
+    let tcp = [0.0004, 0.0002];
+    let m = world.contact_motion(tcp);
+    assert!(!m.inserted && m.settled);
+    let expected = map
+        .interpolate(&[hole[0] - tcp[0], hole[1] - tcp[1]])
+        .expect("in the grid");
+    let w = map_wrench(m.raw);
+    for k in 0..6 {
+        assert!((w[k] - expected[k]).abs() < 1e-9, "channel {k}: {w:?}");
+    }
+    assert_eq!(m.tcp[..2], tcp);
+    assert!(
+        (m.tcp[2] - expected[6]).abs() < 1e-12,
+        "the map's contact depth"
+    );
+    // Along any direction: in at 0.99 clearances, not at 1.01.
+    for k in 0..8 {
+        let t = f64::from(k) * 0.785;
+        let at = |s: f64| [hole[0] - s * c * t.cos(), hole[1] - s * c * t.sin()];
+        assert!(world.contact_motion(at(0.99)).inserted, "direction {k}");
+        assert!(!world.contact_motion(at(1.01)).inserted, "direction {k}");
+    }
+}
+
+#[test]
+fn near_the_hole_a_contact_reads_the_rim_not_a_blend_with_the_inserted_centre() {
+    let (mut world, c) = peg_world();
+    world.set_object([0.0, 0.0]);
+    // 1.2 clearances off (0.06 mm), between the inserted centre cell and the rim cells of
+    // the 0.1 mm grid: the rim's torque (about 50 N x 3.9 mm), not its interpolation
+    // with the centre's zero.
+    let m = world.contact_motion([-1.2 * c, 0.0]);
+    assert!(!m.inserted);
+    let w = map_wrench(m.raw);
+    let torque = w[3].hypot(w[4]);
+    assert!(torque > 0.17, "{torque} N.m");
+}
+
+#[test]
+fn a_slide_drops_in_at_the_first_point_within_the_clearance() {
+    let (mut world, c) = peg_world();
+    let hole = [0.0002, 0.0];
+    world.set_object(hole);
+    // Along x through the hole: in, within the clearance of the hole's centre, at the
+    // near side.
+    let m = world.slide_motion([-0.0002, 0.0], [0.0006, 0.0]);
+    assert!(m.inserted);
+    let miss = (m.tcp[0] - hole[0]).hypot(m.tcp[1] - hole[1]);
+    assert!(miss <= c && miss > 0.7 * c, "{miss}");
+    assert!(
+        m.tcp[0] < hole[0],
+        "entered from the slide's start: {:?}",
+        m.tcp
+    );
+    // Beside the hole by 1.5 clearances: no insertion, ends at `to` as a contact there.
+    let (from, to) = ([-0.0002, 1.5 * c], [0.0006, 1.5 * c]);
+    let m = world.slide_motion(from, to);
+    assert!(!m.inserted);
+    assert_eq!(m, world.contact_motion(to));
+}
+
+#[test]
+fn a_map_over_other_axes_is_refused() {
+    let task = Task::find("peg_in_hole_4dof").expect("task peg_in_hole_4dof");
+    let grid = task.grid().expect("its grid");
+    let meta = common::computed_peg_map().meta().clone();
+    let map = ftmap::FtMap::zeros(grid, meta);
+    let geometry = Task::find("peg_in_hole")
+        .expect("task peg_in_hole")
+        .geometry()
+        .expect("a [geometry]")
+        .clone();
+    let err = MapWorld::new(map, geometry).err().expect("refused");
+    let text = err.to_string();
+    assert!(
+        text.contains("object.rx") && text.contains("object.x"),
+        "{text}"
+    );
+}
