@@ -12,7 +12,8 @@
 //! Collision uses convex pieces only. Part B's top and walls tile the surface exactly
 //! (convex prisms between the hole polygon and a square, boxes outside it, a bottom box):
 //! overlapping pieces would double the contact stiffness where they overlap and skew the
-//! pressure. Part A's contact face is a bed of tiny spheres ([`SPHERE_RADIUS`]): rings along
+//! pressure, and so would pieces whose tops differ by MuJoCo's single-precision rounding
+//! of mesh vertices ([`tile_half_height`]). Part A's contact face is a bed of tiny spheres ([`SPHERE_RADIUS`]): rings along
 //! each boundary, the outermost touching it, and a hexagonal lattice inside, each sphere
 //! standing for the same area, so that the pressure spreads evenly as in the map's centroid
 //! model. Tiny, so that the face's edge is as sharp as the CAD's: spheres of radius r round
@@ -229,8 +230,13 @@ pub enum Piece {
         /// Half sizes.
         half: [f64; 3],
     },
-    /// The convex hull of these vertices (a mesh geom).
-    Hull(Vec<[f64; 3]>),
+    /// The convex hull of `vertices` placed at `center` (a mesh geom).
+    Hull {
+        /// Where the mesh's frame sits.
+        center: [f64; 3],
+        /// Vertices relative to `center`.
+        vertices: Vec<[f64; 3]>,
+    },
     /// A vertical cylinder about the axis from `z0` to `z1`.
     Cylinder {
         /// Radius.
@@ -280,9 +286,23 @@ fn polygon(r: f64, n: usize, phase: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// Half height of part B's pieces whose tops are at `top` (m): the power of two at or
+/// above `top / 2`, so that the pieces reach down to z = 0 and every top lands on `top`
+/// exactly. MuJoCo keeps mesh vertices in single precision, about its centre of mass: a
+/// prism's top at `top` in its own frame would be rounded by up to 0.5 nm, a piece a tenth
+/// of a nanometre higher than its neighbour carries a fifth more load (a part resting on
+/// the top sinks by about a nanometre), and the pressure is no longer even. A prism
+/// symmetric about its mid-plane with a power-of-two half height has its top at exactly
+/// that half height above its centre, and `top - half + half == top` holds in double
+/// precision (Sterbenz), as for a box.
+fn tile_half_height(top: f64) -> f64 {
+    2f64.powi((top / 2.0).log2().ceil() as i32)
+}
+
 /// Part B of a blind hole: convex pieces between the hole outline and a square 1 mm
 /// outside its mouth (prisms, their inner faces sloped where the hole's edge is chamfered),
-/// four boxes out to the block's sides, a bottom box; tops at `depth`.
+/// four boxes out to the block's sides, a bottom box; tops at `depth`, down to
+/// `depth - 2 tile_half_height(depth)` (below the hole's floor: out of reach).
 fn pocket(hole: &Outline, chamfer: f64, block: [f64; 3], depth: f64) -> Vec<Piece> {
     let (wall, mouth) = (hole.corners(0.0), hole.corners(chamfer));
     let s = mouth.iter().map(|q| q[0].hypot(q[1])).fold(0.0, f64::max) + 0.001;
@@ -291,6 +311,8 @@ fn pocket(hole: &Outline, chamfer: f64, block: [f64; 3], depth: f64) -> Vec<Piec
         let k = s / v[0].abs().max(v[1].abs());
         [v[0] * k, v[1] * k]
     };
+    let half = tile_half_height(depth);
+    let zc = depth - half;
     let mut pieces = Vec::new();
     for i in 0..wall.len() {
         let j = (i + 1) % wall.len();
@@ -305,28 +327,44 @@ fn pocket(hole: &Outline, chamfer: f64, block: [f64; 3], depth: f64) -> Vec<Piec
             }
         }
         polygon.push(to_square(a));
-        let mut hull: Vec<[f64; 3]> = polygon.iter().map(|q| [q[0], q[1], 0.0]).collect();
-        let top = [mouth[i], mouth[j]]
+        let n = polygon.len() as f64;
+        let centre = [
+            polygon.iter().map(|q| q[0]).sum::<f64>() / n,
+            polygon.iter().map(|q| q[1]).sum::<f64>() / n,
+        ];
+        // Top and bottom alike (the bottom mirrors the top's chamfer), so that the centre of
+        // mass sits on the mid-plane and MuJoCo does not move the mesh's frame.
+        let face = [mouth[i], mouth[j]]
             .into_iter()
             .chain(polygon[2..].iter().copied());
-        hull.extend(top.map(|q| [q[0], q[1], depth]));
-        if chamfer > 0.0 {
-            hull.extend([a, b].map(|q| [q[0], q[1], depth - chamfer]));
+        let mut vertices = Vec::new();
+        for z in [half, -half] {
+            vertices.extend(face.clone().map(|q| [q[0], q[1], z]));
+            if chamfer > 0.0 {
+                let z = z - chamfer * z.signum();
+                vertices.extend([a, b].map(|q| [q[0], q[1], z]));
+            }
         }
-        pieces.push(Piece::Hull(hull));
+        for v in &mut vertices {
+            v[0] -= centre[0];
+            v[1] -= centre[1];
+        }
+        pieces.push(Piece::Hull {
+            center: [centre[0], centre[1], zc],
+            vertices,
+        });
     }
     let (hx, hy) = (block[0] / 2.0, block[1] / 2.0);
-    let zc = depth / 2.0;
     let strip_y = (hy - s) / 2.0;
     let strip_x = (hx - s) / 2.0;
     for sign in [1.0, -1.0] {
         pieces.push(Piece::Box {
             center: [0.0, sign * (s + strip_y), zc],
-            half: [hx, strip_y, zc],
+            half: [hx, strip_y, half],
         });
         pieces.push(Piece::Box {
             center: [sign * (s + strip_x), 0.0, zc],
-            half: [strip_x, s, zc],
+            half: [strip_x, s, half],
         });
     }
     pieces.push(Piece::Box {
@@ -532,7 +570,7 @@ impl SceneSpec {
             format!("    <mesh name=\"{name}\" vertex=\"{}\"/>", v.join("  "))
         };
         for (i, p) in self.pieces.iter().enumerate() {
-            if let Piece::Hull(vertices) = p {
+            if let Piece::Hull { vertices, .. } = p {
                 let _ = writeln!(x, "{}", hull(format!("piece{i}"), vertices));
             }
         }
@@ -586,9 +624,10 @@ impl SceneSpec {
                         v3(*half)
                     )
                 }
-                Piece::Hull(_) => writeln!(
+                Piece::Hull { center, .. } => writeln!(
                     x,
-                    "      <geom name=\"piece{i}\" type=\"mesh\" mesh=\"piece{i}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>"
+                    "      <geom name=\"piece{i}\" type=\"mesh\" mesh=\"piece{i}\" pos=\"{}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>",
+                    v3(*center)
                 ),
                 Piece::Cylinder { radius, z0, z1 } => writeln!(
                     x,

@@ -27,6 +27,31 @@ fn rim_contact(task: &Task) -> ([f64; 6], f64) {
 }
 
 #[test]
+fn a_face_resting_on_part_b_loads_every_sphere_alike() {
+    // Far off centre, where part A rests on many of part B's pieces: a piece whose top sat a
+    // rounding error lower than its neighbours' would carry less per sphere.
+    for task in &tasks_with_scenes().unwrap() {
+        let spec = SceneSpec::of_task(task).expect("scene description");
+        let mut sim = Sim::load(&scene_path(task), spec).expect("committed scene");
+        let r = 0.9 * task.omega.size_trans;
+        sim.set_object([r * 0.5, r * 0.866]);
+        assert!(sim.contact_motion([0.0, 0.0]).settled, "{}", task.name);
+        let loads = sim.contact_loads();
+        let (lo, hi) = loads
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(l, h), &f| (l.min(f), h.max(f)));
+        let total: f64 = loads.iter().sum();
+        assert!(loads.len() > 20, "{}: {} contacts", task.name, loads.len());
+        assert!(
+            hi / lo < 1.001 && (total - task.contact.force).abs() < 0.01 * task.contact.force,
+            "{}: {} contacts load {lo}..{hi} N, {total} N in all",
+            task.name,
+            loads.len()
+        );
+    }
+}
+
+#[test]
 fn every_scene_loads_and_its_rim_wrench_agrees_with_the_computed_map() {
     let tasks = tasks_with_scenes().unwrap();
     assert_eq!(tasks.len(), 5);
