@@ -1,6 +1,7 @@
 """The harness's calibration figures (summary.json) against NumPy on the same campaign's
 measurements.csv: the fraction of contact measurements whose true offset lies within the
-reported 1- and 2-sigma ellipse, per DOF, and the mean NEES."""
+reported 1- and 2-sigma ellipse (of the reported spreads and their correlation), per DOF,
+and the mean NEES."""
 
 import csv
 import json
@@ -13,6 +14,7 @@ from conftest import missing
 ROOT = Path(__file__).resolve().parent.parent
 HARNESS = ROOT / "target" / "release" / "harness"
 MIN_STD = 1e-9  # harness::calibration::MIN_STD
+MAX_CORR = 0.999  # harness::calibration::MAX_CORR
 
 
 def test_calibration_figures_agree_with_numpy(fmu_path, tmp_path):
@@ -38,7 +40,10 @@ def test_calibration_figures_agree_with_numpy(fmu_path, tmp_path):
     err = np.stack([col("object_x_m") - col("true_x_m"), col("object_y_m") - col("true_y_m")], axis=1)
     std = np.maximum(np.stack([col("object_x_std_m"), col("object_y_std_m")], axis=1), MIN_STD)
     z = err / std
-    nees = (z**2).sum(axis=1)
+    corr = np.clip(col("object_xy_corr"), -MAX_CORR, MAX_CORR)
+    cov = np.stack([np.stack([np.ones_like(corr), corr], axis=1),
+                    np.stack([corr, np.ones_like(corr)], axis=1)], axis=1)
+    nees = np.einsum("ni,nij,nj->n", z, np.linalg.inv(cov), z)
 
     c = json.loads((tmp_path / "summary.json").read_text())["calibration"]
     assert c["measurements"] == len(rows)

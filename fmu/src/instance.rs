@@ -159,6 +159,7 @@ struct Io {
     ess: usize,
     measurements: usize,
     clusters: usize,
+    xy_corr: usize,
 }
 
 impl Io {
@@ -182,6 +183,7 @@ impl Io {
             ess: index_of("ess"),
             measurements: index_of("measurements"),
             clusters: index_of("clusters"),
+            xy_corr: index_of(md::OBJECT_XY_CORR),
         }
     }
 }
@@ -657,6 +659,7 @@ impl Instance {
         self.store.set_real(self.io.ess, e.ess);
         *self.store.get_mut(self.io.measurements) = Value::Integer(f.measurements() as i32);
         *self.store.get_mut(self.io.clusters) = Value::Integer(e.clusters as i32);
+        self.store.set_real(self.io.xy_corr, e.xy_corr);
     }
 
     /// The instance's state as bytes: magic, version, GUID, variable values, contact edge,

@@ -206,6 +206,7 @@ impl Params {
             tail: checked(store, "tail")?,
             clearance: checked(store, "clearance")?,
             mismatch: checked(store, "mismatch")?,
+            mismatch_angle: checked(store, "mismatch_angle")?,
         };
         let map = store.string(index_of("map")).to_owned();
         if map.trim().is_empty() {

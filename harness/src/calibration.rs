@@ -3,8 +3,8 @@
 //! (`object.x_std`, `object.y_std`), the fraction of measurements whose true offset lies
 //! within the 1- and 2-sigma regions, and the normalised estimation error squared (NEES).
 //!
-//! The FMU reports a spread per DOF and no correlation, so the region is the axis-aligned
-//! ellipse with those half-axes. For a calibrated 2-D Gaussian estimate, the true offset lies
+//! The FMU reports a spread per DOF and the correlation of the two (`object.xy_corr`): the
+//! region is the ellipse of that covariance. For a calibrated 2-D Gaussian estimate, the true offset lies
 //! within the 1-sigma ellipse in 1 - e^(-1/2) = 39.3 % of measurements and within the
 //! 2-sigma ellipse in 1 - e^(-2) = 86.5 %; per DOF within 1 and 2 sigma in 68.3 % and 95.4 %;
 //! and the NEES, the sum over the DOFs of (error / sigma)^2, has mean 2 (the DOF count).
@@ -17,6 +17,9 @@ use crate::trial::TrialResult;
 /// Spreads below this (m) count as this: a collapsed spread gives a huge, not an infinite,
 /// NEES.
 pub const MIN_STD: f64 = 1e-9;
+/// Correlations count at most this in magnitude: a degenerate ellipse (a line) gives a huge,
+/// not an infinite, NEES across it.
+pub const MAX_CORR: f64 = 0.999;
 
 /// Names of the DOFs an [`Estimate`] holds, in its order.
 pub const DOFS: [&str; 2] = ["object.x", "object.y"];
@@ -44,9 +47,11 @@ impl Sample {
         })
     }
 
-    /// The normalised estimation error squared.
+    /// The normalised estimation error squared, e^T Sigma^-1 e with the reported covariance.
     pub fn nees(&self) -> f64 {
-        self.z().iter().map(|z| z * z).sum()
+        let [x, y] = self.z();
+        let r = self.estimate.corr.clamp(-MAX_CORR, MAX_CORR);
+        (x * x - 2.0 * r * x * y + y * y) / (1.0 - r * r)
     }
 }
 
@@ -190,6 +195,24 @@ mod tests {
             );
         }
         assert!((c.nees_mean - 2.0).abs() < 0.05, "{c:?}");
+    }
+
+    #[test]
+    fn the_ellipse_follows_the_correlation() {
+        // Spread 1 mm along the diagonal x = y, 0.1 mm across it: std 0.71 mm on each axis,
+        // correlation 0.98. An error of 0.5 mm along the diagonal is within 1 sigma; the
+        // same error across it is 5 sigma, though each axis alone sees 0.35 sigma.
+        let (a, b) = (1e-3f64, 1e-4f64);
+        let std = ((a * a + b * b) / 2.0).sqrt();
+        let corr = (a * a - b * b) / (a * a + b * b);
+        let at = |e: [f64; 2]| {
+            let mut s = sample(e, [std, std]);
+            s.estimate.corr = corr;
+            s
+        };
+        let h = 0.5e-3 / 2f64.sqrt();
+        assert!((at([h, h]).nees() - 0.25).abs() < 1e-9);
+        assert!((at([h, -h]).nees() - 25.0).abs() < 1e-9);
     }
 
     #[test]

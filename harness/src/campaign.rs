@@ -114,6 +114,8 @@ pub struct CampaignOptions {
     pub sigma_depth: Option<f64>,
     /// FMU parameter `mismatch` (share of the measured force's and torque's magnitudes).
     pub mismatch: Option<f64>,
+    /// FMU parameter `mismatch_angle` (rad).
+    pub mismatch_angle: Option<f64>,
     /// Where the contact motions happen.
     pub world: WorldKind,
 }
@@ -445,6 +447,7 @@ fn trial_config(
             sigma_force: options.sigma_force,
             sigma_depth: options.sigma_depth,
             mismatch: options.mismatch,
+            mismatch_angle: options.mismatch_angle,
             sigma_vision: options.sigma_vision,
             vision_method: Some(options.vision_method.parameter()),
             ..Settings::default()

@@ -98,8 +98,16 @@ pub struct Agreement {
     pub regions: Vec<RegionAgreement>,
     /// Mean angle between the (tx, ty) vectors where both exceed the floor (rad).
     pub torque_angle_mean: f64,
+    /// Root mean square of that angle (rad): the direction part of the maps' mismatch, the
+    /// FMU's `mismatch_angle` for a world like A with a map like B.
+    pub torque_angle_rms: f64,
     /// Largest such angle (rad).
     pub torque_angle_max: f64,
+    /// Mean of |(tx, ty) of B| / |(tx, ty) of A| - 1 over the same cells.
+    pub torque_ratio_mean: f64,
+    /// Root mean square of that ratio minus 1: the magnitude part of the maps' mismatch,
+    /// the FMU's `mismatch`.
+    pub torque_ratio_rms: f64,
     /// (a, b) pairs per channel, for plots.
     pub pairs: Vec<Vec<(f64, f64)>>,
     /// Every compared cell, for the plot of where the maps disagree.
@@ -124,7 +132,7 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
             c.first().copied().unwrap_or(0.0),
             c.get(1).copied().unwrap_or(0.0),
         ];
-        compared.push((at, a.cell(cell).map(f64::from), b.interpolate(&c)?));
+        compared.push((at, a.cell(cell).map(f64::from), b.interpolate_contact(&c)?));
     }
     let b_is_reference =
         a.meta().model == WrenchModel::Measured && b.meta().model != WrenchModel::Measured;
@@ -137,7 +145,7 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
     let mut pairs: Vec<Vec<(f64, f64)>> = vec![Vec::new(); NCH];
     let mut by_region: Vec<Vec<Vec<(f64, f64)>>> = vec![vec![Vec::new(); NCH]; Region::ALL.len()];
     let mut cells = Vec::with_capacity(compared.len());
-    let (mut angle_sum, mut angle_max, mut angles) = (0.0, 0.0f64, 0usize);
+    let (mut angle_max, mut angles, mut ratios) = (0.0f64, Vec::new(), Vec::new());
     for (at, va, vb) in &compared {
         let region = Region::of(&reference(va, vb), deepest);
         let r = region as usize;
@@ -158,16 +166,13 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
         if na > TORQUE_FLOOR && nb > TORQUE_FLOOR {
             let cos = ((ta[0] * tb[0] + ta[1] * tb[1]) / (na * nb)).clamp(-1.0, 1.0);
             let ang = cos.acos();
-            angle_sum += ang;
             angle_max = angle_max.max(ang);
-            angles += 1;
+            angles.push(ang);
+            ratios.push(nb / na - 1.0);
         }
     }
-    let mean = if angles == 0 {
-        f64::NAN
-    } else {
-        angle_sum / angles as f64
-    };
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let rms = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt() / (v.len() as f64).sqrt();
     Ok(Agreement {
         channels: channel_agreements(&pairs),
         regions: Region::ALL
@@ -178,8 +183,11 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
                 channels: channel_agreements(p),
             })
             .collect(),
-        torque_angle_mean: mean,
+        torque_angle_mean: mean(&angles),
+        torque_angle_rms: rms(&angles),
         torque_angle_max: angle_max,
+        torque_ratio_mean: mean(&ratios),
+        torque_ratio_rms: rms(&ratios),
         pairs,
         cells,
         axes: std::array::from_fn(|k| {
@@ -285,9 +293,16 @@ impl Agreement {
             }
         }
         s += &format!(
-            "  torque direction (tx, ty) angle: mean {:.1} deg, max {:.1} deg\n",
+            "  torque direction (tx, ty) angle: mean {:.1} deg, RMS {:.1} deg ({:.3} rad), max {:.1} deg\n",
             self.torque_angle_mean.to_degrees(),
+            self.torque_angle_rms.to_degrees(),
+            self.torque_angle_rms,
             self.torque_angle_max.to_degrees()
+        );
+        s += &format!(
+            "  torque magnitude |B| / |A| - 1: mean {:+.1} %, RMS {:.1} %\n",
+            100.0 * self.torque_ratio_mean,
+            100.0 * self.torque_ratio_rms
         );
         s
     }

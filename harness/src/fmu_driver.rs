@@ -42,6 +42,8 @@ pub struct Settings {
     pub sigma_depth: Option<f64>,
     /// `mismatch` (share of the measured magnitudes).
     pub mismatch: Option<f64>,
+    /// `mismatch_angle` (rad).
+    pub mismatch_angle: Option<f64>,
     /// `vision`: an absolute path of a vision model file.
     pub vision: Option<PathBuf>,
     /// `sigma_vision` (px).
@@ -57,6 +59,8 @@ pub struct Estimate {
     pub object: [f64; 2],
     /// `object.x_std`, `object.y_std` (m).
     pub std: [f64; 2],
+    /// `object.xy_corr`: the correlation of the two.
+    pub corr: f64,
     /// `confidence` (0..1).
     pub confidence: f64,
     /// `converged`.
@@ -79,7 +83,8 @@ struct Refs {
     slide_start: [u32; 2],
     object: [u32; 2],
     std: [u32; 2],
-    reals: [u32; 2],
+    /// confidence, ess, object.xy_corr.
+    reals: [u32; 3],
     ints: [u32; 2],
     converged: u32,
     map: u32,
@@ -88,6 +93,7 @@ struct Refs {
     iterations: u32,
     sigma_torque: u32,
     mismatch: u32,
+    mismatch_angle: u32,
     sigma_force: u32,
     sigma_depth: u32,
     vision: u32,
@@ -159,7 +165,7 @@ impl Fmu {
             slide_start: group(md::SLIDE_START, vr)?,
             object: [vr(md::OBJECT[0])?, vr(md::OBJECT[1])?],
             std: [vr(md::OBJECT_STD[0])?, vr(md::OBJECT_STD[1])?],
-            reals: [vr("confidence")?, vr("ess")?],
+            reals: [vr("confidence")?, vr("ess")?, vr(md::OBJECT_XY_CORR)?],
             ints: [vr("measurements")?, vr("clusters")?],
             converged: vr("converged")?,
             map: vr("map")?,
@@ -168,6 +174,7 @@ impl Fmu {
             iterations: vr("iterations")?,
             sigma_torque: vr("sigma_torque")?,
             mismatch: vr("mismatch")?,
+            mismatch_angle: vr("mismatch_angle")?,
             sigma_force: vr("sigma_force")?,
             sigma_depth: vr("sigma_depth")?,
             vision: vr("vision")?,
@@ -234,6 +241,7 @@ impl Fmu {
             (r.sigma_force, settings.sigma_force, "sigma_force"),
             (r.sigma_depth, settings.sigma_depth, "sigma_depth"),
             (r.mismatch, settings.mismatch, "mismatch"),
+            (r.mismatch_angle, settings.mismatch_angle, "mismatch_angle"),
             (r.sigma_vision, settings.sigma_vision, "sigma_vision"),
         ];
         for (vr, v, name) in reals {
@@ -344,7 +352,7 @@ impl Estimator {
     pub fn estimate(&mut self) -> Result<Estimate> {
         let r = &self.refs;
         let (mut object, mut std, mut reals, mut ints, mut conv) =
-            ([0.0; 2], [0.0; 2], [0.0; 2], [0; 2], [0]);
+            ([0.0; 2], [0.0; 2], [0.0; 3], [0; 2], [0]);
         self.inst
             .get_real(&r.object, &mut object)
             .map_err(fmi_err("get object"))?;
@@ -353,7 +361,7 @@ impl Estimator {
             .map_err(fmi_err("get object std"))?;
         self.inst
             .get_real(&r.reals, &mut reals)
-            .map_err(fmi_err("get confidence, ess"))?;
+            .map_err(fmi_err("get confidence, ess, object.xy_corr"))?;
         self.inst
             .get_integer(&r.ints, &mut ints)
             .map_err(fmi_err("get measurements, clusters"))?;
@@ -363,6 +371,7 @@ impl Estimator {
         Ok(Estimate {
             object,
             std,
+            corr: reals[2],
             confidence: reals[0],
             converged: conv[0] != 0,
             ess: reals[1],

@@ -13,10 +13,17 @@
 //! (convex prisms between the hole polygon and a square, boxes outside it, a bottom box):
 //! overlapping pieces would double the contact stiffness where they overlap and skew the
 //! pressure, and so would pieces whose tops differ by MuJoCo's single-precision rounding
-//! of mesh vertices ([`tile_half_height`]). Part A's contact face is a bed of tiny spheres ([`SPHERE_RADIUS`]): rings along
-//! each boundary, the outermost touching it, and a hexagonal lattice inside, each sphere
-//! standing for the same area, so that the pressure spreads evenly as in the map's centroid
-//! model. Tiny, so that the face's edge is as sharp as the CAD's: spheres of radius r round
+//! of mesh vertices ([`tile_half_height`]). Part A's contact face is a bed of tiny spheres
+//! ([`SPHERE_RADIUS`]): a hexagonal lattice inside, and rings along each outline in bands
+//! that double in width from [`FIRST_BAND`] at the outline to half the lattice's pitch,
+//! the outermost touching it. Each sphere stands for the area of its cell of the face (a
+//! lattice cell clipped by the bands, a stretch of a band) and carries a stiffness in
+//! proportion ([`CELL_STIFFNESS`]), so that a resting face is pressed as in the map's
+//! centroid model: the load of each patch of the face goes through its own centroid,
+//! whether part B supports it or not. A ring's spheres sit at depths dithered across their
+//! band (van der Corput), so that where part B's edge crosses a band, the share of the
+//! band still supported varies smoothly and not in steps of a whole ring. Tiny, so that
+//! the face's edge is as sharp as the CAD's: spheres of radius r round
 //! it by r and roll over part B's edges, and MuJoCo then accepts the part up to r farther
 //! off centre than the geometry does (`harness boundary` measures it). The STL meshes are
 //! visuals only (contype 0). The MJCF also loads in MuJoCo 2.2.2 (`autolimits`, no
@@ -35,8 +42,31 @@ use crate::error::{HarnessError, Result};
 /// Radius of the spheres of part A's contact bed (m): the face's edge acts as a round of
 /// this radius, and no sphere rolls over part B's edges.
 pub const SPHERE_RADIUS: f64 = 0.000002;
-/// Rings of spheres along each outline of the contact face.
-pub const RIM_RINGS: usize = 4;
+/// Width of the band of the contact face that the outermost ring of spheres stands for (m);
+/// each next ring's band is twice as wide, up to half the lattice's pitch.
+pub const FIRST_BAND: f64 = 0.000005;
+/// The van der Corput depths of a ring's spheres are centred in bins of this many.
+const RING_DEPTHS: f64 = 64.0;
+/// Sub-samples per side of a lattice cell where it meets the rings' bands.
+const CELL_SAMPLES: usize = 8;
+/// Direct contact stiffness and damping of a sphere standing for a lattice cell (MuJoCo's
+/// negative `solref`: stiffness 1/(dmax tc)^2, damping 2/(dmax tc) for the time constant tc
+/// of 0.5 ms and the impedance's dmax of 0.95, as the part B pieces' positive `solref`
+/// has). A sphere standing for a smaller area has a stiffness in proportion, so that the
+/// load spreads by area at rest, and a cell's damping: MuJoCo sets part A's acceleration to
+/// about the mean of its contacts' reference accelerations, and with damping scaled down
+/// too (in proportion, or to keep each contact critically damped) that mean was
+/// underdamped where part A rests on many small spheres: it bounced on them and never
+/// settled (bearing_housing, 2 mm off); scaled up to damp the softest sphere critically, a
+/// cell's damping exceeded one per time step and threw part A back. While part A still
+/// moves, the damping holds a share of its load by count, not by area: at the moment a
+/// contact motion settles (`sim`), a torque 0.1-0.3 mm off the hole, where part A rests on
+/// a thin crescent of part B, reads 4-11 % above the one it settles to later, 1.5 % at
+/// 0.6 mm, 0.1 % at 2 mm. Waiting for it let part A creep over the hole's edge on the
+/// softest spheres (insertion 10 µm beyond the fit).
+const CELL_STIFFNESS: f64 = 4.432e6;
+/// See [`CELL_STIFFNESS`].
+const CELL_DAMPING: f64 = 4210.5;
 /// Polygon count of a round hole's walls.
 pub const HOLE_SIDES: usize = 48;
 /// Wedges of a round peg's chamfer, its vertices on the peg's radius: the flats lie 2.7 µm
@@ -109,15 +139,31 @@ impl Outline {
         v.iter().map(|q| [q[0] * s, q[1] * s]).collect()
     }
 
-    /// Points along the outline moved `offset` outwards (negative: inwards), spaced at most `pitch`.
-    fn ring(&self, offset: f64, pitch: f64) -> Vec<[f64; 2]> {
+    /// Length of the outline moved `offset` outwards (negative: inwards).
+    fn length(&self, offset: f64) -> f64 {
+        match self {
+            Self::Circle(r) => TAU * (r + offset),
+            Self::Polygon(v) => {
+                let scale = (self.inside([0.0, 0.0]) + offset) / self.inside([0.0, 0.0]);
+                (0..v.len())
+                    .map(|i| {
+                        let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                        (b[0] - a[0]).hypot(b[1] - a[1]) * scale
+                    })
+                    .sum()
+            }
+        }
+    }
+
+    /// Points along the outline, spaced at most `pitch` along it moved `offset` outwards
+    /// (negative: inwards), point `j` moved by `offset_of(j)` instead.
+    fn ring(&self, offset: f64, pitch: f64, offset_of: impl Fn(usize) -> f64) -> Vec<[f64; 2]> {
         match self {
             Self::Circle(r) => {
-                let r = r + offset;
-                let n = (TAU * r / pitch).ceil().max(3.0) as usize;
+                let n = (TAU * (r + offset) / pitch).ceil().max(3.0) as usize;
                 (0..n)
                     .map(|i| {
-                        let t = TAU * i as f64 / n as f64;
+                        let (t, r) = (TAU * i as f64 / n as f64, r + offset_of(i));
                         [r * t.cos(), r * t.sin()]
                     })
                     .collect()
@@ -125,14 +171,14 @@ impl Outline {
             Self::Polygon(v) => {
                 // Regular polygons about the axis: scale by the apothem change.
                 let apothem = self.inside([0.0, 0.0]);
-                let s = (apothem + offset) / apothem;
+                let scale = |offset: f64| (apothem + offset) / apothem;
                 let mut pts = Vec::new();
                 for i in 0..v.len() {
                     let (a, b) = (v[i], v[(i + 1) % v.len()]);
-                    let len = (b[0] - a[0]).hypot(b[1] - a[1]) * s;
+                    let len = (b[0] - a[0]).hypot(b[1] - a[1]) * scale(offset);
                     let n = (len / pitch).ceil().max(1.0) as usize;
                     for k in 0..n {
-                        let t = k as f64 / n as f64;
+                        let (t, s) = (k as f64 / n as f64, scale(offset_of(pts.len())));
                         pts.push([
                             s * (a[0] + t * (b[0] - a[0])),
                             s * (a[1] + t * (b[1] - a[1])),
@@ -143,6 +189,27 @@ impl Outline {
             }
         }
     }
+}
+
+/// The van der Corput sequence in base 2 at `j`: 0, 1/2, 1/4, 3/4, 1/8, ... (every run of
+/// consecutive terms spreads over [0, 1)).
+fn van_der_corput(mut j: usize) -> f64 {
+    let (mut x, mut f) = (0.0, 0.5);
+    while j > 0 {
+        x += f * (j & 1) as f64;
+        j >>= 1;
+        f *= 0.5;
+    }
+    x
+}
+
+/// One sphere of part A's contact bed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sphere {
+    /// Centre (x, y) in the task frame (m).
+    pub at: [f64; 2],
+    /// Area of the face it stands for (m^2).
+    pub area: f64,
 }
 
 /// The contact face of part A: the region the sphere bed covers, and the chamfer around it.
@@ -162,20 +229,61 @@ pub struct Face {
 }
 
 impl Face {
-    /// Sphere centres (x, y) of the bed, in the task frame: [`RIM_RINGS`] rings along each
-    /// outline across a band one pitch wide, the outermost touching the outline, then the
-    /// lattice. Every sphere stands for about the same area of the face (a lattice cell), so
-    /// that the pressure spreads evenly, also over a crescent thinner than the pitch.
-    pub fn bed(&self) -> Vec<[f64; 2]> {
+    /// Area of a lattice cell (m^2).
+    pub fn cell_area(&self) -> f64 {
+        self.pitch * self.pitch * 3f64.sqrt() / 2.0
+    }
+
+    /// How far `q` lies inside the flat of the face (m): from the outline moved in by the
+    /// chamfer, and from the bore; negative outside.
+    fn depth(&self, q: [f64; 2]) -> f64 {
+        let outer = self.outer.inside(q) - self.chamfer;
+        self.inner
+            .as_ref()
+            .map_or(outer, |inner| outer.min(-inner.inside(q)))
+    }
+
+    /// The bed's spheres, in the task frame, each with the area of the face it stands for.
+    /// Rings along each outline cover bands whose widths double from [`FIRST_BAND`] at the
+    /// outline to half the pitch (the outermost ring touching the outline, so that the face's
+    /// edge is as sharp as the spheres are small; the others at their bands' middles); a
+    /// hexagonal lattice covers the rest, a cell that the rings' bands cut standing for the
+    /// part beyond them, from its centroid. Each sphere's contact stiffness follows its area
+    /// ([`SceneSpec::mjcf`]), so that the pressure spreads evenly, by area, over any contact
+    /// region, down to crescents a few micrometres wide.
+    pub fn bed(&self) -> Vec<Sphere> {
         let p = self.pitch;
-        let cell = p * p * 3f64.sqrt() / 2.0;
-        let (ring_step, ring_pitch) = (p / RIM_RINGS as f64, cell * RIM_RINGS as f64 / p);
-        let mut pts = Vec::new();
-        for k in 0..RIM_RINGS {
-            let inset = SPHERE_RADIUS + k as f64 * ring_step;
-            pts.extend(self.outer.ring(-inset - self.chamfer, ring_pitch));
+        let end = 0.5 * p;
+        let mut bands = vec![0.0, FIRST_BAND];
+        while 2.0 * bands[bands.len() - 1] < end {
+            bands.push(2.0 * bands[bands.len() - 1]);
+        }
+        bands.push(end);
+        let mut bed = Vec::new();
+        for (k, band) in bands.windows(2).enumerate() {
+            let width = band[1] - band[0];
+            let middle = 0.5 * (band[0] + band[1]);
+            // A ring's spheres are spread over its band's depth (van der Corput), so that a
+            // contact region whose edge crosses the band takes in the share of its spheres
+            // that the region's depth takes of the band, not all or none.
+            let inset = |j: usize| {
+                if k == 0 {
+                    SPHERE_RADIUS
+                } else {
+                    band[0] + (van_der_corput(j) + 0.5 / RING_DEPTHS) * width
+                }
+            };
+            let outer = -middle - self.chamfer;
+            let mut rings = vec![(
+                self.outer.ring(outer, p, |j| -inset(j) - self.chamfer),
+                self.outer.length(outer),
+            )];
             if let Some(inner) = &self.inner {
-                pts.extend(inner.ring(inset, ring_pitch));
+                rings.push((inner.ring(middle, p, inset), inner.length(middle)));
+            }
+            for (ring, length) in rings {
+                let area = width * length / ring.len() as f64;
+                bed.extend(ring.into_iter().map(|at| Sphere { at, area }));
             }
         }
         let row = p * 3f64.sqrt() / 2.0;
@@ -183,18 +291,37 @@ impl Face {
             (self.reach / p).ceil() as i64 + 1,
             (self.reach / row).ceil() as i64 + 1,
         );
+        let sub = |k: usize| (k as f64 + 0.5) / CELL_SAMPLES as f64 - 0.5;
         for j in -nj..=nj {
             let shift = if j.rem_euclid(2) == 1 { 0.5 * p } else { 0.0 };
             for i in -ni..=ni {
                 let q = [i as f64 * p + shift, j as f64 * row];
-                let outside_inner = self.inner.as_ref().is_none_or(|o| -o.inside(q) >= p);
-                if self.outer.inside(q) >= p + self.chamfer && outside_inner {
-                    pts.push(q);
+                if self.depth(q) < end - p {
+                    continue;
                 }
+                // The cell as the p x row rectangle about q (the hexagon's area), sampled.
+                let inside: Vec<[f64; 2]> = (0..CELL_SAMPLES * CELL_SAMPLES)
+                    .map(|k| {
+                        let (a, b) = (sub(k % CELL_SAMPLES), sub(k / CELL_SAMPLES));
+                        [q[0] + a * p, q[1] + b * row]
+                    })
+                    .filter(|&s| self.depth(s) >= end)
+                    .collect();
+                if inside.is_empty() {
+                    continue;
+                }
+                let m = inside.len() as f64;
+                bed.push(Sphere {
+                    at: [
+                        inside.iter().map(|s| s[0]).sum::<f64>() / m,
+                        inside.iter().map(|s| s[1]).sum::<f64>() / m,
+                    ],
+                    area: self.cell_area() * m / (CELL_SAMPLES * CELL_SAMPLES) as f64,
+                });
             }
         }
-        pts.retain(|q| q[0].hypot(q[1]) <= self.reach);
-        pts
+        bed.retain(|s| s.at[0].hypot(s.at[1]) <= self.reach);
+        bed
     }
 
     /// The chamfer as convex wedges, one per side of the outline (vertices in the task
@@ -669,14 +796,19 @@ impl SceneSpec {
             x,
             "        <geom name=\"visual_a\" class=\"visual\" type=\"mesh\" mesh=\"visual_a\" rgba=\"0.8 0.6 0.3 1\"/>"
         );
-        for (i, q) in bed.iter().enumerate() {
+        // The spheres take precedence in their contacts' parameters (priority), with a
+        // direct stiffness in proportion to the area each stands for.
+        let cell = self.face.cell_area();
+        for (i, sphere) in bed.iter().enumerate() {
             let _ = writeln!(
                 x,
-                "        <geom name=\"bed{i}\" type=\"sphere\" size=\"{}\" pos=\"{} {} {}\" rgba=\"0.8 0.3 0.2 1\"{hidden}/>",
+                "        <geom name=\"bed{i}\" type=\"sphere\" size=\"{}\" pos=\"{} {} {}\" priority=\"1\" solref=\"{} {}\" rgba=\"0.8 0.3 0.2 1\"{hidden}/>",
                 f(SPHERE_RADIUS),
-                f(q[0]),
-                f(q[1]),
-                f(SPHERE_RADIUS)
+                f(sphere.at[0]),
+                f(sphere.at[1]),
+                f(SPHERE_RADIUS),
+                f(-CELL_STIFFNESS * sphere.area / cell),
+                f(-CELL_DAMPING)
             );
         }
         for i in 0..wedges.len() {

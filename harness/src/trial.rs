@@ -61,50 +61,107 @@ pub enum Motion {
     Slide([f64; 2], [f64; 2]),
 }
 
-/// The slide covers the estimate's spread along its line this many times each way.
+/// The slide covers the estimate's spread along its major axis this many times each way.
 pub const SLIDE_SIGMAS: f64 = 2.0;
-/// Error of the direction a contact's torque gives (rad): `harness compare-maps` measures
-/// 1.3° mean, 5° max between the map's and MuJoCo's torque directions.
-pub const DIRECTION_ERROR: f64 = 0.035;
+/// Share of the fit's clearance within which a motion counts on part A going in: a slide
+/// drops in where it passes within 0.9 clearances of the hole (`harness/tests/slide.rs`).
+pub const CAPTURE: f64 = 0.9;
 
-/// The motion after a contact at `tcp` that gave `estimate`: a contact at the estimate; or,
-/// with `slide` (the fit's clearance), a slide under force across the estimate where its
-/// spread is a segment wider than the clearance. A contact near the hole tells the
-/// direction of part B well and its distance poorly (the rim torque's lever hardly changes
-/// with the offset), so the posterior is a segment along the line from `tcp` to the
-/// estimate: used when that line is close enough that its direction's error moves it by at
-/// most half the clearance. A camera sees one axis better than the other, so the posterior
-/// is a segment along the axis it sees least: used when the spread across that axis is
-/// within half the clearance. Contact motions would halve such a segment one by one; a
-/// slide crosses it in one motion and drops in where it finds the hole.
+/// The estimate's spread as a 2-D Gaussian: its standard deviations along the major and
+/// minor axes and the major axis's direction (`object.x_std`, `object.y_std`,
+/// `object.xy_corr`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spread {
+    /// Standard deviation along the major axis (m).
+    pub major: f64,
+    /// Standard deviation along the minor axis (m).
+    pub minor: f64,
+    /// Unit direction of the major axis.
+    pub axis: [f64; 2],
+}
+
+impl Spread {
+    /// The principal axes of the estimate's covariance.
+    pub fn of(e: &Estimate) -> Self {
+        let [sx, sy] = e.std;
+        let (a, b, c) = (sx * sx, e.corr * sx * sy, sy * sy);
+        let mid = 0.5 * (a + c);
+        let half = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+        let theta = 0.5 * (2.0 * b).atan2(a - c);
+        Self {
+            major: (mid + half).max(0.0).sqrt(),
+            minor: (mid - half).max(0.0).sqrt(),
+            axis: [theta.cos(), theta.sin()],
+        }
+    }
+
+    /// The chance that part B lies within `r` of the estimate (a contact motion there goes
+    /// in): the Gaussian's mass over the disc, by quadrature over the direction.
+    pub fn within(&self, r: f64) -> f64 {
+        const STEPS: usize = 64;
+        let (a, b) = (self.major.max(1e-12), self.minor.max(1e-12));
+        let sum: f64 = (0..STEPS)
+            .map(|k| {
+                let t = std::f64::consts::TAU * (k as f64 + 0.5) / STEPS as f64;
+                let q = (t.cos() / a).powi(2) + (t.sin() / b).powi(2);
+                (1.0 - (-0.5 * r * r * q).exp()) / q
+            })
+            .sum();
+        (sum / STEPS as f64 / (a * b)).min(1.0)
+    }
+
+    /// The chance that a slide along the major axis across `SLIDE_SIGMAS` of it each way
+    /// passes within `r` of part B.
+    pub fn swept(&self, r: f64) -> f64 {
+        let inside = |x: f64, s: f64| {
+            if s > 0.0 {
+                erf(x / (s * 2f64.sqrt()))
+            } else {
+                1.0
+            }
+        };
+        inside(r, self.minor) * inside(SLIDE_SIGMAS * self.major + r, self.major)
+    }
+}
+
+/// The error function (Abramowitz and Stegun 7.1.26, absolute error below 1.5e-7).
+fn erf(x: f64) -> f64 {
+    let t = 1.0 / (1.0 + 0.327_591_1 * x.abs());
+    let poly = t
+        * (0.254_829_592
+            + t * (-0.284_496_736
+                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    (1.0 - poly * (-x * x).exp()).copysign(x)
+}
+
+/// The motion after a measurement that gave `estimate`, the TCP at `tcp`: a contact at the
+/// estimate (Algorithm 1), or, with `slide` (the fit's clearance), a slide under force
+/// along the major axis of the estimate's spread, across [`SLIDE_SIGMAS`] of it each way,
+/// where the spread reaches beyond the capture and a slide is likelier to find the hole
+/// than a contact at the estimate (a slide through it covers the disc a contact would: with
+/// a spread within the capture a contact is enough). A contact near
+/// the hole tells the direction of part B well and its distance poorly (the rim torque's
+/// lever hardly changes with the offset), and a camera sees one axis better than the other:
+/// the posterior is then a segment that contact motions would halve one by one, and that
+/// a slide crosses in one motion, dropping in where it finds the hole. The slide starts at
+/// the end nearer the TCP.
 pub fn next_motion(tcp: [f64; 2], estimate: &Estimate, slide: Option<f64>) -> Motion {
     let e = estimate.object;
     let Some(clearance) = slide else {
         return Motion::Contact(e);
     };
-    let along = |u: [f64; 2]| (u[0] * estimate.std[0]).hypot(u[1] * estimate.std[1]);
-    let (dx, dy) = (e[0] - tcp[0], e[1] - tcp[1]);
-    let dist = dx.hypot(dy);
-    let line = (dist > 0.0 && dist * DIRECTION_ERROR <= 0.5 * clearance)
-        .then(|| [dx / dist, dy / dist])
-        .filter(|&u| along(u) > clearance);
-    let wide = usize::from(estimate.std[1] > estimate.std[0]);
-    let mut axis = [0.0; 2];
-    axis[wide] = 1.0;
-    let segment = line.or_else(|| {
-        (estimate.std[wide] > clearance && estimate.std[1 - wide] <= 0.5 * clearance)
-            .then_some(axis)
-    });
-    match segment {
-        Some(u) => {
-            let half = SLIDE_SIGMAS * along(u);
-            Motion::Slide(
-                [e[0] - half * u[0], e[1] - half * u[1]],
-                [e[0] + half * u[0], e[1] + half * u[1]],
-            )
-        }
-        None => Motion::Contact(e),
+    let spread = Spread::of(estimate);
+    let reach = CAPTURE * clearance;
+    if spread.major <= reach || spread.swept(reach) <= spread.within(reach) {
+        return Motion::Contact(e);
     }
+    let toward = (e[0] - tcp[0]) * spread.axis[0] + (e[1] - tcp[1]) * spread.axis[1];
+    let u = spread.axis.map(|a| if toward < 0.0 { -a } else { a });
+    let half = SLIDE_SIGMAS * spread.major;
+    Motion::Slide(
+        [e[0] - half * u[0], e[1] - half * u[1]],
+        [e[0] + half * u[0], e[1] + half * u[1]],
+    )
 }
 
 /// One contact motion of a trial.
@@ -256,10 +313,7 @@ pub fn run_trial(
                     Motion::Contact(_) => None,
                 };
                 let est = e.measure(wrench, c.tcp, slide_start, image.as_ref())?;
-                // After a slide that found no hole the next motion is a contact: slides in a
-                // row, each ruling out its line, run into long tails (docs/RESULTS.md).
-                let slide = cfg.slide.filter(|_| matches!(motion, Motion::Contact(_)));
-                motion = next_motion([c.tcp[0], c.tcp[1]], &est, slide);
+                motion = next_motion([c.tcp[0], c.tcp[1]], &est, cfg.slide);
                 Some(est)
             }
             None => None,
@@ -290,47 +344,105 @@ pub fn run_trial(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sensor::gaussian;
 
-    fn estimate(object: [f64; 2], std: [f64; 2]) -> Estimate {
-        Estimate {
-            object,
-            std,
+    #[test]
+    fn the_spread_has_the_covariance_s_principal_axes() {
+        // 0.3 mm along 30 degrees, 0.02 mm across: back from x/y spreads and correlation.
+        let (a, b, t) = (3e-4f64, 2e-5f64, 30f64.to_radians());
+        let (sx2, sy2) = (
+            (a * t.cos()).powi(2) + (b * t.sin()).powi(2),
+            (a * t.sin()).powi(2) + (b * t.cos()).powi(2),
+        );
+        let cxy = (a * a - b * b) * t.sin() * t.cos();
+        let e = Estimate {
+            std: [sx2.sqrt(), sy2.sqrt()],
+            corr: cxy / (sx2 * sy2).sqrt(),
             ..Estimate::default()
-        }
+        };
+        let s = Spread::of(&e);
+        assert!(
+            (s.major - a).abs() < 1e-12 && (s.minor - b).abs() < 1e-12,
+            "{s:?}"
+        );
+        assert!((s.axis[1].atan2(s.axis[0]) - t).abs() < 1e-9, "{s:?}");
     }
 
     #[test]
-    fn the_next_motion_slides_across_a_segment_along_the_line_or_an_axis() {
+    fn the_chances_of_going_in_are_the_gaussian_s() {
+        // A round Gaussian: the disc of radius r holds 1 - exp(-r^2 / 2 s^2).
+        let round = Spread {
+            major: 1e-4,
+            minor: 1e-4,
+            axis: [1.0, 0.0],
+        };
+        for r in [2e-5, 1e-4, 3e-4] {
+            let want = 1.0 - (-0.5 * (r / 1e-4f64).powi(2)).exp();
+            assert!((round.within(r) - want).abs() < 1e-6, "{r}");
+        }
+        // An elongated one against a Monte Carlo count of the same Gaussian.
+        let long = Spread {
+            major: 3e-4,
+            minor: 3e-5,
+            axis: [1.0, 0.0],
+        };
+        let (mut rng, r) = (StdRng::seed_from_u64(3), 5e-5);
+        let n = 200_000;
+        let hits = (0..n)
+            .filter(|_| {
+                let (x, y) = (3e-4 * gaussian(&mut rng), 3e-5 * gaussian(&mut rng));
+                x.hypot(y) <= r
+            })
+            .count();
+        assert!((long.within(r) - hits as f64 / n as f64).abs() < 0.005);
+        // A slide along it passes within r where |minor error| <= r and the major error is
+        // within the slide's reach: erf(r / (sqrt 2 minor)) erf((2 major + r) / (sqrt 2 major)).
+        let want = 0.904_419 * 0.969_740;
+        assert!((long.swept(r) - want).abs() < 1e-6, "{}", long.swept(r));
+    }
+
+    #[test]
+    fn the_next_motion_slides_where_a_slide_is_likelier_to_find_the_hole() {
         let c = 5e-5;
         let tcp = [0.001, 0.002];
-        // 0.2 mm away along +x, spread 0.1 mm along x: a slide from 0.2 mm before the
-        // estimate to 0.2 mm beyond, on the line through the TCP.
-        let e = estimate([0.0012, 0.002], [1e-4, 1e-5]);
-        match next_motion(tcp, &e, Some(c)) {
+        // Spread 0.1 mm along x, 0.01 mm across: a slide along x through the estimate from
+        // the end nearer the TCP, 0.2 mm each way.
+        let along_x = Estimate {
+            object: [0.0014, 0.002],
+            std: [1e-4, 1e-5],
+            ..Estimate::default()
+        };
+        match next_motion(tcp, &along_x, Some(c)) {
             Motion::Slide(a, b) => {
-                assert!((a[0] - 0.001).abs() < 1e-12 && (b[0] - 0.0014).abs() < 1e-12);
+                assert!((a[0] - 0.0012).abs() < 1e-12 && (b[0] - 0.0016).abs() < 1e-12);
                 assert!((a[1] - 0.002).abs() < 1e-12 && (b[1] - 0.002).abs() < 1e-12);
             }
             m => panic!("{m:?}"),
         }
-        // The line too long for its direction's error, but the spread a segment along y (a
-        // camera's view): a slide along y across the estimate.
-        let e = estimate([0.003, 0.002], [1e-5, 1e-4]);
-        match next_motion(tcp, &e, Some(c)) {
+        // The same along the diagonal (correlated x and y): the slide follows it, starting
+        // nearer the TCP.
+        let s = 1e-4 / 2f64.sqrt();
+        let diagonal = Estimate {
+            object: [0.0, 0.0],
+            std: [s, s],
+            corr: 0.98,
+            ..Estimate::default()
+        };
+        match next_motion([0.001, 0.001], &diagonal, Some(c)) {
             Motion::Slide(a, b) => {
-                assert!((a[0] - 0.003).abs() < 1e-12 && (b[0] - 0.003).abs() < 1e-12);
-                assert!((a[1] - 0.0018).abs() < 1e-12 && (b[1] - 0.0022).abs() < 1e-12);
+                assert!(a[0] > 0.0 && (a[0] - a[1]).abs() < 2e-6, "{a:?}");
+                assert!((b[0] + a[0]).abs() < 1e-12 && (b[1] + a[1]).abs() < 1e-12);
             }
             m => panic!("{m:?}"),
         }
-        // Spread within the clearance, slides off, or the line too long for its direction's
-        // error and the spread across the wide axis over half the clearance: a contact at
-        // the estimate.
-        for (e, slide) in [
-            (estimate([0.0012, 0.002], [4e-5, 1e-5]), Some(c)),
-            (e, None),
-            (estimate([0.003, 0.002], [1e-4, 3e-5]), Some(c)),
-        ] {
+        // A spread within the capture: a contact at the estimate; and a contact without
+        // slides, whatever the spread.
+        for (std, slide) in [([2e-5, 3e-5], Some(c)), ([1e-4, 1e-5], None)] {
+            let e = Estimate {
+                object: [0.0003, 0.0],
+                std,
+                ..Estimate::default()
+            };
             assert_eq!(next_motion(tcp, &e, slide), Motion::Contact(e.object));
         }
     }

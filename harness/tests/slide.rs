@@ -32,8 +32,14 @@ fn a_slide_drops_in_where_it_crosses_the_hole_and_not_beside_it() {
             let off = (m.tcp[0] - hole[0]).hypot(m.tcp[1] - hole[1]);
             assert!(off < c, "{beside}: {m:?}");
         } else {
-            // It ran to its end.
+            // It ran to its end, and reads the static contact there, not the friction that
+            // held part A sideways while it slid (15 N, 0.9 N.m about the sensor).
             assert!((m.tcp[0] - to[0]).abs() < 2e-5, "{beside}: {m:?}");
+            let end = sim.contact_motion([m.tcp[0], m.tcp[1]]);
+            for (x, y) in m.raw.iter().zip(&end.raw) {
+                assert!((x - y).abs() < 1e-4, "{beside}: {m:?} {end:?}");
+            }
+            assert!(m.raw[0].hypot(m.raw[1]) < 0.1, "{beside}: {m:?}");
         }
     }
     // A slide of no length reads what a contact motion reads (it settles twice).

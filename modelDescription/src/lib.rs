@@ -10,9 +10,9 @@ mod table;
 mod xml;
 
 pub use table::{
-    CONTACT, Causality, GRIP, GRIP_STD, Initial, OBJECT, OBJECT_STD, SLIDE, SLIDE_START, Start,
-    TCP, VARIABLES, VISION_FEATURES, VISION_INPUT_VRS, VISION_PARAMETER_VRS, VISION_VALID, VarType,
-    Variability, Variable, WRENCH, by_name, by_vr,
+    CONTACT, Causality, GRIP, GRIP_STD, Initial, OBJECT, OBJECT_STD, OBJECT_XY_CORR, SLIDE,
+    SLIDE_START, Start, TCP, VARIABLES, VISION_FEATURES, VISION_INPUT_VRS, VISION_PARAMETER_VRS,
+    VISION_VALID, VarType, Variability, Variable, WRENCH, by_name, by_vr,
 };
 pub use xml::{guid, xml};
 

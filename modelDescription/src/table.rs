@@ -156,6 +156,8 @@ pub const OBJECT_STD: [&str; 6] = [
     "object.ry_std",
     "object.rz_std",
 ];
+/// The correlation of the object's x and y spreads.
+pub const OBJECT_XY_CORR: &str = "object.xy_corr";
 
 /// Value references of the vision parameters (`vision`, `sigma_vision`, ...).
 pub const VISION_PARAMETER_VRS: Range<u32> = 150..200;
@@ -378,11 +380,23 @@ pub const VARIABLES: &[Variable] = &[
         "mismatch",
         113,
         Real,
-        Start::Real(0.1),
+        Start::Real(0.05),
         "",
         [Some(0.0), Some(1.0)],
         "Share of the measured force's and torque's magnitudes that the map may miss (contact \
-         physics it does not model), added to sigma_force and sigma_torque in quadrature",
+         physics it does not model): along the measured vector, added to sigma_force and \
+         sigma_torque in quadrature",
+    ),
+    param(
+        "mismatch_angle",
+        114,
+        Real,
+        Start::Real(0.03),
+        "rad",
+        [Some(0.0), Some(1.0)],
+        "Angle by which the map may miss the direction of the measured force and torque: across \
+         the measured vector, that angle times its magnitude is added to sigma_force and \
+         sigma_torque in quadrature",
     ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
@@ -695,6 +709,15 @@ pub const VARIABLES: &[Variable] = &[
         "",
         "Particle clusters holding at least 5 % of the weight",
     ),
+    output(
+        OBJECT_XY_CORR,
+        329,
+        Real,
+        "",
+        "Correlation of object.x and object.y over the dominant cluster about the estimate \
+         (-1..1): with object.x_std and object.y_std, the spread along any direction; 0 unless \
+         both are uncertain",
+    ),
 ];
 
 /// The variable with value reference `vr`.
@@ -731,6 +754,7 @@ mod tests {
             .chain(&OBJECT)
             .chain(&GRIP_STD)
             .chain(&OBJECT_STD)
+            .chain(&[OBJECT_XY_CORR])
         {
             assert_eq!(kind(name), real_out, "{name}");
         }

@@ -3,6 +3,8 @@
 //! cluster (refined by the weighted mean around it), its spread about that estimate, and
 //! the confidence.
 
+use ftmap::{Axis, Pose};
+
 use super::{Config, Lookup};
 
 /// Share of the total weight a cluster must hold to be counted.
@@ -16,6 +18,9 @@ pub struct Estimate {
     /// Weighted root-mean-square distance of the dominant cluster from the estimate per map
     /// axis: the estimate's expected error (about the cluster's mean when the two agree).
     pub std: Vec<f64>,
+    /// Correlation of the `object.x` and `object.y` axes over the dominant cluster about the
+    /// estimate (0 unless the map has both).
+    pub xy_corr: f64,
     /// Weight within the confidence radius of the estimate (0..1).
     pub confidence: f64,
     /// confidence > threshold.
@@ -123,19 +128,35 @@ impl Estimate {
             .iter()
             .map(|s| if near_w > 0.0 { s / near_w } else { 0.0 })
             .collect();
-        // The cluster's mean squared distance from the estimate.
+        // The cluster's mean squared distance from the estimate, and the x-y cross term.
+        let object = |axis| {
+            axes.iter()
+                .position(|a| a.dof.pose == Pose::Object && a.dof.axis == axis)
+        };
+        let xy = object(Axis::X).zip(object(Axis::Y));
         let mut var = vec![0.0f64; d];
-        let mut cluster_w = 0.0;
+        let (mut cov_xy, mut cluster_w) = (0.0, 0.0);
         for &c in &members {
             for &(_, i) in &order[cells[c].2..cells[c].3] {
                 let i = i as usize;
-                for k in 0..d {
-                    let e = f64::from(pos[k * n + i]) - est[k];
-                    var[k] += w[i] * e * e;
+                let e = |k: usize| f64::from(pos[k * n + i]) - est[k];
+                for (k, v) in var.iter_mut().enumerate() {
+                    *v += w[i] * e(k) * e(k);
+                }
+                if let Some((kx, ky)) = xy {
+                    cov_xy += w[i] * e(kx) * e(ky);
                 }
                 cluster_w += w[i];
             }
         }
+        let xy_corr = xy.map_or(0.0, |(kx, ky)| {
+            let norm = (var[kx] * var[ky]).sqrt();
+            if norm > 0.0 {
+                (cov_xy / norm).clamp(-1.0, 1.0)
+            } else {
+                0.0
+            }
+        });
 
         // Confidence: weight within the radius, in grid intervals of the finest translation.
         let ref_step = axes
@@ -171,6 +192,7 @@ impl Estimate {
                 .zip(&var)
                 .map(|(a, &v)| (v / cluster_w.max(f64::MIN_POSITIVE)).sqrt() * a.step)
                 .collect(),
+            xy_corr,
             confidence,
             converged: confidence > cfg.threshold,
             ess: if sum_w2 > 0.0 {

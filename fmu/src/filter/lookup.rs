@@ -70,6 +70,51 @@ pub struct Lookup {
     largest: [f64; 2],
 }
 
+/// How a predicted cell is weighed against a measurement (Eq. 3, -1/2 chi^2): each
+/// channel's residual squared times its inverse variance, plus, for the force and torque
+/// vectors, `along` times the square of the residual's component along `axis` (the measured
+/// vector's direction), so that the map may miss a vector's magnitude by more (or less)
+/// than its direction.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Weights {
+    /// Measured channels, padded.
+    pub meas: [f32; LANES],
+    /// Inverse variances of the channels (0: unused).
+    pub inv_var: [f32; LANES],
+    /// Unit direction of the measured force and torque (zero: none).
+    pub axis: [[f32; 3]; 2],
+    /// Extra inverse variance along each `axis`.
+    pub along: [f32; 2],
+}
+
+impl Weights {
+    /// Weights of `meas` with inverse variances `inv_var` alone (no direction term).
+    pub fn diagonal(meas: [f32; LANES], inv_var: [f32; LANES]) -> Self {
+        Self {
+            meas,
+            inv_var,
+            ..Self::default()
+        }
+    }
+
+    /// -1/2 chi^2 of the predicted channels `pred` (the contact lane's inverse variance is 0).
+    #[inline(always)]
+    fn log_likelihood(&self, pred: &[f32; LANES]) -> f32 {
+        let mut d = [0.0f32; LANES];
+        let mut s = 0.0;
+        for l in 0..LANES {
+            d[l] = self.meas[l] - pred[l];
+            s += self.inv_var[l] * d[l] * d[l];
+        }
+        for g in 0..2 {
+            let a = &self.axis[g];
+            let p = d[3 * g] * a[0] + d[3 * g + 1] * a[1] + d[3 * g + 2] * a[2];
+            s += self.along[g] * p * p;
+        }
+        -0.5 * s
+    }
+}
+
 /// Which lookup the likelihood uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Interpolation {
@@ -240,25 +285,24 @@ impl Lookup {
 
     /// Writes -1/2 of the weighted squared residual (Eq. 3 in log space, constants
     /// dropped) of every particle into `out`. `pos` holds the particles' grid coordinates
-    /// axis-major (`pos[k * n + i]`), `shift` the TCP shift per axis, `meas` the measured
-    /// channels and `inv_var` 1/sigma^2 per channel (0 for unused ones).
+    /// axis-major (`pos[k * n + i]`), `shift` the TCP shift per axis, `w` the measurement
+    /// and its weights.
     pub fn log_likelihood(
         &self,
         interp: Interpolation,
         pos: &[f32],
         shift: &[f32],
-        meas: &[f32; LANES],
-        inv_var: &[f32; LANES],
+        w: &Weights,
         out: &mut [f32],
     ) {
         macro_rules! dispatch {
             ($($d:literal)*) => {
                 match (self.ndim(), interp) {
                     $(
-                        ($d, Interpolation::Nearest) => self.ll_nearest::<$d>(pos, shift, meas, inv_var, out),
-                        ($d, Interpolation::Multilinear) => self.ll_linear::<$d>(pos, shift, meas, inv_var, out),
+                        ($d, Interpolation::Nearest) => self.ll_nearest::<$d>(pos, shift, w, out),
+                        ($d, Interpolation::Multilinear) => self.ll_linear::<$d>(pos, shift, w, out),
                     )*
-                    _ => self.ll_any(interp, pos, shift, meas, inv_var, out),
+                    _ => self.ll_any(interp, pos, shift, w, out),
                 }
             };
         }
@@ -280,14 +324,7 @@ impl Lookup {
         (top, lo_max, stride, up)
     }
 
-    fn ll_nearest<const D: usize>(
-        &self,
-        pos: &[f32],
-        shift: &[f32],
-        meas: &[f32; LANES],
-        inv_var: &[f32; LANES],
-        out: &mut [f32],
-    ) {
+    fn ll_nearest<const D: usize>(&self, pos: &[f32], shift: &[f32], w: &Weights, out: &mut [f32]) {
         let n = out.len();
         let (top, _, stride, _) = self.axis_params::<D>();
         for (i, o) in out.iter_mut().enumerate() {
@@ -296,18 +333,11 @@ impl Lookup {
                 let t = (pos[k * n + i] - shift[k]).clamp(0.0, top[k]);
                 idx += (t + 0.5) as usize * stride[k];
             }
-            *o = residual(&self.cells[idx], meas, inv_var);
+            *o = w.log_likelihood(&self.cells[idx]);
         }
     }
 
-    fn ll_linear<const D: usize>(
-        &self,
-        pos: &[f32],
-        shift: &[f32],
-        meas: &[f32; LANES],
-        inv_var: &[f32; LANES],
-        out: &mut [f32],
-    ) {
+    fn ll_linear<const D: usize>(&self, pos: &[f32], shift: &[f32], w: &Weights, out: &mut [f32]) {
         let n = out.len();
         let (top, lo_max, stride, up) = self.axis_params::<D>();
         for (i, o) in out.iter_mut().enumerate() {
@@ -334,14 +364,14 @@ impl Lookup {
                 len *= 2;
             }
             let mut acc = [0.0f32; LANES];
-            for (w, &c) in wts.iter().zip(&idx).take(1 << D) {
+            for (wt, &c) in wts.iter().zip(&idx).take(1 << D) {
                 let cell = &self.cells[c];
                 for l in 0..LANES {
-                    acc[l] += w * cell[l];
+                    acc[l] += wt * cell[l];
                 }
             }
             over_contacts(&mut acc);
-            *o = residual(&acc, meas, inv_var);
+            *o = w.log_likelihood(&acc);
         }
     }
 
@@ -350,8 +380,7 @@ impl Lookup {
         interp: Interpolation,
         pos: &[f32],
         shift: &[f32],
-        meas: &[f32; LANES],
-        inv_var: &[f32; LANES],
+        w: &Weights,
         out: &mut [f32],
     ) {
         let n = out.len();
@@ -364,7 +393,7 @@ impl Lookup {
                     Interpolation::Multilinear => t,
                 };
             }
-            *o = residual(&self.at(&u), meas, inv_var);
+            *o = w.log_likelihood(&self.at(&u));
         }
     }
 }
@@ -380,15 +409,4 @@ fn over_contacts(acc: &mut [f32; LANES]) {
             *v *= s;
         }
     }
-}
-
-/// -1/2 sum_l inv_var[l] (meas[l] - pred[l])^2 (the contact lane's inv_var is 0).
-#[inline(always)]
-fn residual(pred: &[f32; LANES], meas: &[f32; LANES], inv_var: &[f32; LANES]) -> f32 {
-    let mut s = 0.0;
-    for l in 0..LANES {
-        let d = meas[l] - pred[l];
-        s += inv_var[l] * d * d;
-    }
-    -0.5 * s
 }

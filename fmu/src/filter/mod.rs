@@ -26,7 +26,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
 pub use estimate::Estimate;
-pub use lookup::{Interpolation, LANES, Lookup, MapAxis};
+pub use lookup::{Interpolation, LANES, Lookup, MapAxis, Weights};
 pub use negative::NegativeContact;
 pub use state::{Reader, Writer};
 pub use vision::{Prepared, VisionMeasurement, VisionMethod, VisionSense};
@@ -75,9 +75,13 @@ pub struct Config {
     /// Radial clearance of the negative contact (m): 0, the map's; negative, no negative
     /// contact (module `negative`).
     pub clearance: f64,
-    /// Share of the measured force's and torque's magnitudes the map may miss, added to
-    /// `sigma_force` and `sigma_torque` in quadrature (model mismatch).
+    /// Share of the measured force's and torque's magnitudes the map may miss: along the
+    /// measured vector, added to `sigma_force` and `sigma_torque` in quadrature (model
+    /// mismatch).
     pub mismatch: f64,
+    /// Angle by which the map may miss the measured force's and torque's directions (rad):
+    /// across the measured vector, that angle times its magnitude is added in quadrature.
+    pub mismatch_angle: f64,
 }
 
 impl Default for Config {
@@ -95,7 +99,8 @@ impl Default for Config {
             interpolation: Interpolation::Multilinear,
             tail: 4.0,
             clearance: 0.0,
-            mismatch: 0.1,
+            mismatch: 0.05,
+            mismatch_angle: 0.03,
         }
     }
 }
@@ -324,24 +329,30 @@ impl Filter {
         }
         meas[6] = height as f32;
         let [force, torque] = self.lookup.largest();
-        let (vf, vt) = (
-            inverse_variance(c.sigma_force, c.mismatch, &m.wrench[..3], force),
-            inverse_variance(c.sigma_torque, c.mismatch, &m.wrench[3..], torque),
+        let (f, t) = (
+            Mismatch::of(c, c.sigma_force, &m.wrench[..3], force),
+            Mismatch::of(c, c.sigma_torque, &m.wrench[3..], torque),
         );
         let vd = if use_depth {
             (1.0 / (c.sigma_depth * c.sigma_depth)) as f32
         } else {
             0.0
         };
-        let inv_var = [vf, vf, vf, vt, vt, vt, vd, 0.0];
+        let weights = Weights {
+            meas,
+            inv_var: [
+                f.across, f.across, f.across, t.across, t.across, t.across, vd, 0.0,
+            ],
+            axis: [f.axis, t.axis],
+            along: [f.along, t.along],
+        };
         let evidence = Evidence {
             negative: negative.map(|n| {
                 let tcp = [m.tcp[0], m.tcp[1]];
                 (n, m.slide_start.unwrap_or(tcp), tcp)
             }),
             shift: self.lookup.tcp_shift(&m.tcp),
-            meas,
-            inv_var,
+            weights,
             force: !m.vision_only,
             vision,
         };
@@ -370,15 +381,14 @@ impl Filter {
                 self.cfg.interpolation,
                 &self.pos,
                 &ev.shift,
-                &ev.meas,
-                &ev.inv_var,
+                &ev.weights,
                 ll,
             );
             if self.cfg.tail > 0.0 {
                 // Multivariate Student-t in the Gaussian's chi^2 = -2 ll over the d channels
                 // used: log (1 + chi^2 / nu) ^ (-(nu + d) / 2).
                 let nu = self.cfg.tail as f32;
-                let d = ev.inv_var.iter().filter(|v| **v > 0.0).count() as f32;
+                let d = ev.weights.inv_var.iter().filter(|v| **v > 0.0).count() as f32;
                 for l in ll.iter_mut() {
                     *l = -0.5 * (nu + d) * (-2.0 * *l / nu).ln_1p();
                 }
@@ -477,14 +487,42 @@ impl Filter {
     }
 }
 
-/// The inverse variance of a wrench component: the sensor's `sigma` and the share
-/// `mismatch` of the measured vector's magnitude (what the map may miss) in quadrature. The
-/// magnitude counts up to the map's `largest`: a wrench beyond anything the map holds is
-/// not excused by its own size.
-fn inverse_variance(sigma: f64, mismatch: f64, measured: &[f64], largest: f64) -> f32 {
-    let magnitude = measured.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let miss = mismatch * magnitude.min(largest);
-    (1.0 / (sigma * sigma + miss * miss)) as f32
+/// How far the map may miss a measured force or torque vector: inverse variances across
+/// and along its direction.
+struct Mismatch {
+    /// 1 / (sigma^2 + (mismatch_angle |v|)^2): each component, across the measured vector.
+    across: f32,
+    /// The measured vector's direction (zero for a vector too small to have one).
+    axis: [f32; 3],
+    /// 1 / (sigma^2 + (mismatch |v|)^2) - `across`: what the component along `axis` weighs
+    /// more (or less) than one across it.
+    along: f32,
+}
+
+impl Mismatch {
+    /// The mismatch of a measured vector `v` whose sensor noise is `sigma`, the vector's
+    /// magnitude counted up to the map's `largest`: a wrench beyond anything the map holds
+    /// is not excused by its own size.
+    fn of(c: &Config, sigma: f64, v: &[f64], largest: f64) -> Self {
+        let magnitude = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let counted = magnitude.min(largest);
+        let inverse = |share: f64| 1.0 / (sigma * sigma + (share * counted).powi(2));
+        let across = inverse(c.mismatch_angle);
+        if magnitude <= sigma {
+            // No direction to speak of: the smaller of the two weights on every component.
+            let w = across.min(inverse(c.mismatch)) as f32;
+            return Self {
+                across: w,
+                axis: [0.0; 3],
+                along: 0.0,
+            };
+        }
+        Self {
+            across: across as f32,
+            axis: std::array::from_fn(|k| (v[k] / magnitude) as f32),
+            along: (inverse(c.mismatch) - across) as f32,
+        }
+    }
 }
 
 /// What one measurement offers the particles, ready for every iteration.
@@ -494,10 +532,8 @@ struct Evidence {
     negative: Option<(NegativeContact, [f64; 2], [f64; 2])>,
     /// TCP shift of each map axis (grid units).
     shift: Vec<f32>,
-    /// Measured channels, padded.
-    meas: [f32; LANES],
-    /// Inverse variances of the channels (0: unused).
-    inv_var: [f32; LANES],
+    /// The measured channels and how the residual weighs them.
+    weights: Weights,
     /// The wrench counts (a contact).
     force: bool,
     /// The image's detections, prepared.

@@ -279,21 +279,23 @@ fn one_gross_outlier_keeps_the_truth_within_two_sigma_and_the_next_contact_recov
     );
 }
 
-/// A world whose torques are 15 % larger than the map's (contact physics lengthening the
-/// edge contact's lever): in how many of 12 cases does the truth stay within 2 sigma on
-/// both axes over three contacts, each at the last estimate?
-fn kept_under_a_longer_lever(mismatch: f64) -> usize {
+/// A world whose torques the map misses by `distort` (contact physics moving the edge
+/// contact's lever): in how many of 12 cases does the truth stay within 2 sigma on both
+/// axes over three contacts, each at the last estimate, with `mismatch` and
+/// `mismatch_angle` as given?
+fn kept_under_a_distorted_torque(distort: fn(&mut [f64]), mismatch: f64, angle: f64) -> usize {
     (0..12u64)
         .filter(|&k| {
             let a = 0.3 + 0.52 * k as f64;
             let truth = [(0.5 + 0.2 * k as f64) * 1e-3 * a.cos(), 2e-3 * a.sin()];
             let mut f = filter(k + 40);
             f.cfg.mismatch = mismatch;
+            f.cfg.mismatch_angle = angle;
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(k + 140);
             let mut tcp = [0.0, 0.0];
             (0..3).all(|_| {
                 let mut m = measurement(truth[0], truth[1], tcp, 2e-3, &mut rng);
-                m.wrench[3..].iter_mut().for_each(|t| *t *= 1.15);
+                distort(&mut m.wrench[3..]);
                 f.measure(&m).expect("finite");
                 let e = f.estimate();
                 tcp = [e.pose[0], e.pose[1]];
@@ -305,11 +307,33 @@ fn kept_under_a_longer_lever(mismatch: f64) -> usize {
 
 #[test]
 fn the_mismatch_term_keeps_the_truth_within_two_sigma_where_the_map_misses_the_lever() {
-    let with = kept_under_a_longer_lever(Config::default().mismatch);
-    let without = kept_under_a_longer_lever(0.0);
+    // Torques 15 % longer than the map's, `mismatch` set to that miss (the documented rule).
+    let longer = |t: &mut [f64]| t.iter_mut().for_each(|v| *v *= 1.15);
+    let with = kept_under_a_distorted_torque(longer, 0.15, 0.0);
+    let without = kept_under_a_distorted_torque(longer, 0.0, 0.0);
     assert!(
         with >= 9,
         "the truth kept in {with} of 12 with the mismatch term"
+    );
+    assert!(without < with, "without {without}, with {with}");
+}
+
+#[test]
+fn the_angle_term_keeps_the_truth_within_two_sigma_where_the_map_misses_the_direction() {
+    // Torques turned by 0.1 rad about the approach axis, `mismatch_angle` set to that miss,
+    let turned = |t: &mut [f64]| {
+        let (s, c) = 0.1f64.sin_cos();
+        let [x, y] = [t[0], t[1]];
+        t[0] = c * x - s * y;
+        t[1] = s * x + c * y;
+    };
+    // `mismatch` at its default for the torque's size.
+    let mismatch = Config::default().mismatch;
+    let with = kept_under_a_distorted_torque(turned, mismatch, 0.1);
+    let without = kept_under_a_distorted_torque(turned, mismatch, 0.0);
+    assert!(
+        with >= 9,
+        "the truth kept in {with} of 12 with the angle term"
     );
     assert!(without < with, "without {without}, with {with}");
 }
@@ -402,21 +426,14 @@ fn nearest_lookup_reads_cells_and_multilinear_interpolates() {
     let meas: [f32; LANES] = std::array::from_fn(|l| if l < 7 { want[l] as f32 } else { 0.0 });
     // Every channel but the contact lane, which the filter never weighs.
     let inv: [f32; LANES] = std::array::from_fn(|l| if l < 7 { 1.0 } else { 0.0 });
-    lookup.log_likelihood(
-        Interpolation::Multilinear,
-        &half,
-        &[0.0, 0.0],
-        &meas,
-        &inv,
-        &mut ll,
-    );
+    let w = Weights::diagonal(meas, inv);
+    lookup.log_likelihood(Interpolation::Multilinear, &half, &[0.0, 0.0], &w, &mut ll);
     assert!(ll[0].abs() < 1e-9, "{}", ll[0]);
     lookup.log_likelihood(
         Interpolation::Nearest,
         &[u[0] + 0.4, u[1] - 0.4],
         &[0.0, 0.0],
-        &meas,
-        &inv,
+        &w,
         &mut ll,
     );
     let cell = map.nearest(&[2e-3, -1e-3]).expect("2 coords");

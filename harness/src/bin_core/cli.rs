@@ -237,6 +237,9 @@ pub struct RunArgs {
     /// FMU parameter `mismatch` (share of the measured force's and torque's magnitudes).
     #[arg(long)]
     pub mismatch: Option<f64>,
+    /// FMU parameter `mismatch_angle` (rad: how far the map may miss their directions).
+    #[arg(long)]
+    pub mismatch_angle: Option<f64>,
     /// Where the contact motions happen: the task's MuJoCo scene, or a world that is the
     /// FT-Map itself (the map's wrench at the true offset, part A going in where the
     /// geometry says).
@@ -342,6 +345,7 @@ impl RunArgs {
             sigma_force: self.sigma_force,
             sigma_depth: self.sigma_depth,
             mismatch: self.mismatch,
+            mismatch_angle: self.mismatch_angle,
             world: match self.world {
                 WorldArg::Mujoco => WorldKind::Mujoco,
                 WorldArg::Map => WorldKind::Map(self.world_map),
