@@ -4,10 +4,10 @@
 //! within the 1- and 2-sigma regions, and the normalised estimation error squared (NEES).
 //!
 //! The FMU reports a spread per DOF and the correlation of the two (`object.xy_corr`): the
-//! region is the ellipse of that covariance. For a calibrated 2-D Gaussian estimate, the true offset lies
-//! within the 1-sigma ellipse in 1 - e^(-1/2) = 39.3 % of measurements and within the
-//! 2-sigma ellipse in 1 - e^(-2) = 86.5 %; per DOF within 1 and 2 sigma in 68.3 % and 95.4 %;
-//! and the NEES, the sum over the DOFs of (error / sigma)^2, has mean 2 (the DOF count).
+//! region is the ellipse of that covariance C. For a calibrated 2-D Gaussian estimate, the
+//! true offset lies within the 1-sigma ellipse in 1 - e^(-1/2) = 39.3 % of measurements and
+//! within the 2-sigma ellipse in 1 - e^(-2) = 86.5 %; per DOF within 1 and 2 sigma in 68.3 %
+//! and 95.4 %; and the NEES, e^T C^-1 e for the error e, has mean 2 (the DOF count).
 
 use serde::Serialize;
 

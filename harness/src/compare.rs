@@ -123,6 +123,7 @@ pub struct Agreement {
 /// When the maps' grids have different DOFs.
 pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
     let mut compared: Vec<([f64; 2], [f64; NCH], [f64; NCH])> = Vec::new();
+    let b_contact = b.contact_depth();
     for cell in 0..a.grid().cells() {
         let c = a.grid().coords(cell);
         if !b.grid().contains(&c) {
@@ -132,7 +133,11 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Agreement> {
             c.first().copied().unwrap_or(0.0),
             c.get(1).copied().unwrap_or(0.0),
         ];
-        compared.push((at, a.cell(cell).map(f64::from), b.interpolate_contact(&c)?));
+        compared.push((
+            at,
+            a.cell(cell).map(f64::from),
+            b.interpolate_contact(&c, b_contact)?,
+        ));
     }
     let b_is_reference =
         a.meta().model == WrenchModel::Measured && b.meta().model != WrenchModel::Measured;

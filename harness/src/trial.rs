@@ -115,23 +115,13 @@ impl Spread {
     pub fn swept(&self, r: f64) -> f64 {
         let inside = |x: f64, s: f64| {
             if s > 0.0 {
-                erf(x / (s * 2f64.sqrt()))
+                libm::erf(x / (s * 2f64.sqrt()))
             } else {
                 1.0
             }
         };
         inside(r, self.minor) * inside(SLIDE_SIGMAS * self.major + r, self.major)
     }
-}
-
-/// The error function (Abramowitz and Stegun 7.1.26, absolute error below 1.5e-7).
-fn erf(x: f64) -> f64 {
-    let t = 1.0 / (1.0 + 0.327_591_1 * x.abs());
-    let poly = t
-        * (0.254_829_592
-            + t * (-0.284_496_736
-                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
-    (1.0 - poly * (-x * x).exp()).copysign(x)
 }
 
 /// The motion after a measurement that gave `estimate`, the TCP at `tcp`: a contact at the

@@ -61,6 +61,8 @@ const SLIDE_SAMPLES_PER_CLEARANCE: f64 = 8.0;
 /// depth; part A goes in where the task's geometry says it does.
 pub struct MapWorld {
     map: FtMap,
+    /// The map's [`FtMap::contact_depth`].
+    contact_depth: Option<f32>,
     geometry: Geometry,
     object: [f64; 2],
 }
@@ -89,6 +91,7 @@ impl MapWorld {
             )));
         }
         Ok(Self {
+            contact_depth: map.contact_depth(),
             map,
             geometry,
             object: [0.0; 2],
@@ -106,7 +109,10 @@ impl MapWorld {
         let offset = self.offset(xy);
         let inserted = self.geometry.inserts(offset);
         // The map's axes were checked: the coordinates fit its grid.
-        let cell = self.map.interpolate_contact(&offset).unwrap_or([0.0; NCH]);
+        let cell = self
+            .map
+            .interpolate_contact(&offset, self.contact_depth)
+            .unwrap_or([0.0; NCH]);
         let mut raw = [0.0; 6];
         for (r, w) in raw.iter_mut().zip(&cell) {
             *r = -w;

@@ -148,14 +148,25 @@ impl FtMap {
         })
     }
 
+    /// The depth that tells a contact from an insertion: the middle of the depth channel's
+    /// range (between resting on part B and inserted); `None` on a map without depths.
+    pub fn contact_depth(&self) -> Option<f32> {
+        self.depth_range().map(|[lo, hi]| 0.5 * (lo + hi))
+    }
+
     /// The channels of a contact at `coords`: multilinear over the surrounding cells where
-    /// part A rests on part B, leaving out the cells where it went in (their wrench says
-    /// nothing about a contact); plain [`FtMap::interpolate`] where every corner went in.
-    pub fn interpolate_contact(&self, coords: &[f64]) -> Result<[f64; NCH]> {
-        let Some([lo, hi]) = self.depth_range() else {
+    /// part A rests on part B (depth at or above `contact_depth`, from
+    /// [`FtMap::contact_depth`], which reads every cell: find it once), leaving out the
+    /// cells where it went in (their wrench says nothing about a contact); plain
+    /// [`FtMap::interpolate`] where every corner went in or the map has no depths.
+    pub fn interpolate_contact(
+        &self,
+        coords: &[f64],
+        contact_depth: Option<f32>,
+    ) -> Result<[f64; NCH]> {
+        let Some(middle) = contact_depth else {
             return self.interpolate(coords);
         };
-        let middle = 0.5 * (lo + hi);
         match self.interpolate_over(coords, |c| c[NCH - 1] >= middle)? {
             (contact, total) if total > 0.0 => Ok(contact),
             _ => self.interpolate(coords),
@@ -258,7 +269,8 @@ pub(crate) mod tests {
         // Depth x^2 over x in [-2, 2] mm: the middle of its range is 2e-6, so only the
         // columns x = ±2 mm are contacts.
         let map = sample_map();
-        let c = map.interpolate_contact(&[1.5e-3, 0.0]).unwrap();
+        let depth = map.contact_depth();
+        let c = map.interpolate_contact(&[1.5e-3, 0.0], depth).unwrap();
         assert!(
             (c[4] + 2.0).abs() < 1e-6,
             "the x = 2 mm column alone: {c:?}"
@@ -266,7 +278,7 @@ pub(crate) mod tests {
         let plain = map.interpolate(&[1.5e-3, 0.0]).unwrap();
         assert!((plain[4] + 1.5).abs() < 1e-6, "{plain:?}");
         // Every corner went in: plain interpolation.
-        let inside = map.interpolate_contact(&[0.5e-3, 0.0]).unwrap();
+        let inside = map.interpolate_contact(&[0.5e-3, 0.0], depth).unwrap();
         assert_eq!(inside, map.interpolate(&[0.5e-3, 0.0]).unwrap());
     }
 }
