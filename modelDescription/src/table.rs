@@ -380,7 +380,7 @@ pub const VARIABLES: &[Variable] = &[
         "mismatch",
         113,
         Real,
-        Start::Real(0.05),
+        Start::Real(0.03),
         "",
         [Some(0.0), Some(1.0)],
         "Share of the measured force's and torque's magnitudes that the map may miss (contact \

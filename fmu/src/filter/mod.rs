@@ -99,7 +99,7 @@ impl Default for Config {
             interpolation: Interpolation::Multilinear,
             tail: 4.0,
             clearance: 0.0,
-            mismatch: 0.05,
+            mismatch: 0.03,
             mismatch_angle: 0.03,
         }
     }
