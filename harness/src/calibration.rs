@@ -35,6 +35,8 @@ pub struct Sample {
     pub image: bool,
     /// The true offset (m).
     pub truth: [f64; 2],
+    /// The true grip offset (m).
+    pub grip_truth: [f64; 2],
     /// The FMU's outputs after the measurement.
     pub estimate: Estimate,
 }
@@ -44,6 +46,13 @@ impl Sample {
     pub fn z(&self) -> [f64; 2] {
         std::array::from_fn(|k| {
             (self.estimate.object[k] - self.truth[k]) / self.estimate.std[k].max(MIN_STD)
+        })
+    }
+
+    /// Error of the grip estimate in units of its reported spread, per DOF.
+    pub fn grip_z(&self) -> [f64; 2] {
+        std::array::from_fn(|k| {
+            (self.estimate.grip[k] - self.grip_truth[k]) / self.estimate.grip_std[k].max(MIN_STD)
         })
     }
 
@@ -70,6 +79,7 @@ pub fn samples(results: &[TrialResult]) -> Vec<Sample> {
                     measurement: k + 1,
                     image,
                     truth: r.offset,
+                    grip_truth: r.grip,
                     estimate,
                 })
         })
@@ -154,6 +164,7 @@ mod tests {
             measurement: 1,
             image: false,
             truth: [1e-3, -2e-3],
+            grip_truth: [0.0; 2],
             estimate: Estimate {
                 object: [1e-3 + error[0], -2e-3 + error[1]],
                 std,

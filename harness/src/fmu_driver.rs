@@ -61,6 +61,10 @@ pub struct Estimate {
     pub std: [f64; 2],
     /// `object.xy_corr`: the correlation of the two.
     pub corr: f64,
+    /// `grip.x`, `grip.y` (m; 0 where the map's grip is certain).
+    pub grip: [f64; 2],
+    /// `grip.x_std`, `grip.y_std` (m).
+    pub grip_std: [f64; 2],
     /// `confidence` (0..1).
     pub confidence: f64,
     /// `converged`.
@@ -83,6 +87,8 @@ struct Refs {
     slide_start: [u32; 2],
     object: [u32; 2],
     std: [u32; 2],
+    /// grip.x, grip.y, grip.x_std, grip.y_std.
+    grip: [u32; 4],
     /// confidence, ess, object.xy_corr.
     reals: [u32; 3],
     ints: [u32; 2],
@@ -165,6 +171,12 @@ impl Fmu {
             slide_start: group(md::SLIDE_START, vr)?,
             object: [vr(md::OBJECT[0])?, vr(md::OBJECT[1])?],
             std: [vr(md::OBJECT_STD[0])?, vr(md::OBJECT_STD[1])?],
+            grip: [
+                vr(md::GRIP[0])?,
+                vr(md::GRIP[1])?,
+                vr(md::GRIP_STD[0])?,
+                vr(md::GRIP_STD[1])?,
+            ],
             reals: [vr("confidence")?, vr("ess")?, vr(md::OBJECT_XY_CORR)?],
             ints: [vr("measurements")?, vr("clusters")?],
             converged: vr("converged")?,
@@ -351,14 +363,17 @@ impl Estimator {
     /// When the FMU refuses a get call.
     pub fn estimate(&mut self) -> Result<Estimate> {
         let r = &self.refs;
-        let (mut object, mut std, mut reals, mut ints, mut conv) =
-            ([0.0; 2], [0.0; 2], [0.0; 3], [0; 2], [0]);
+        let (mut object, mut std, mut grip, mut reals, mut ints, mut conv) =
+            ([0.0; 2], [0.0; 2], [0.0; 4], [0.0; 3], [0; 2], [0]);
         self.inst
             .get_real(&r.object, &mut object)
             .map_err(fmi_err("get object"))?;
         self.inst
             .get_real(&r.std, &mut std)
             .map_err(fmi_err("get object std"))?;
+        self.inst
+            .get_real(&r.grip, &mut grip)
+            .map_err(fmi_err("get grip and its std"))?;
         self.inst
             .get_real(&r.reals, &mut reals)
             .map_err(fmi_err("get confidence, ess, object.xy_corr"))?;
@@ -372,6 +387,8 @@ impl Estimator {
             object,
             std,
             corr: reals[2],
+            grip: [grip[0], grip[1]],
+            grip_std: [grip[2], grip[3]],
             confidence: reals[0],
             converged: conv[0] != 0,
             ess: reals[1],

@@ -65,6 +65,47 @@ pub struct Summary {
     pub slides: usize,
     /// Trials whose part went in on a slide.
     pub inserted_by_slide: usize,
+    /// The grip estimate, where the campaign's grip offsets were uncertain.
+    pub grip: Option<GripSummary>,
+}
+
+/// How well a campaign found the grip offsets.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct GripSummary {
+    /// Mean distance of the trials' last grip estimate from the true grip offset (m).
+    pub error_mean: f64,
+    /// Largest such distance (m).
+    pub error_max: f64,
+    /// Share of contact measurements whose true grip.x, grip.y lies within 2 reported sigma.
+    pub within_2sigma: [f64; 2],
+}
+
+impl GripSummary {
+    /// The summary of `results` and their `samples`; `None` where no trial's grip was off.
+    fn of(results: &[TrialResult], samples: &[Sample]) -> Option<Self> {
+        if results.iter().all(|r| r.grip == [0.0; 2]) {
+            return None;
+        }
+        let errors: Vec<f64> = results
+            .iter()
+            .filter_map(|r| {
+                let e = r.steps.iter().rev().find_map(|s| s.estimate)?;
+                Some((e.grip[0] - r.grip[0]).hypot(e.grip[1] - r.grip[1]))
+            })
+            .collect();
+        let n = samples.len().max(1) as f64;
+        Some(Self {
+            error_mean: errors.iter().sum::<f64>() / errors.len().max(1) as f64,
+            error_max: errors.iter().copied().fold(0.0, f64::max),
+            within_2sigma: std::array::from_fn(|k| {
+                samples
+                    .iter()
+                    .filter(|s| s.grip_z()[k].abs() <= 2.0)
+                    .count() as f64
+                    / n
+            }),
+        })
+    }
 }
 
 impl ContactStats {
@@ -103,6 +144,7 @@ pub fn summarize(
     let sim: f64 = results.iter().map(|r| r.sim_time).sum();
     let sim_wall: f64 = results.iter().map(|r| r.sim_wall).sum();
     let trial_wall: f64 = results.iter().map(|r| r.wall).sum();
+    let samples = calibration::samples(results);
     Summary {
         task: task.to_owned(),
         world: world.clone(),
@@ -112,9 +154,9 @@ pub fn summarize(
         contacts: ContactStats::of(results.iter().map(|r| r.contacts as f64).collect()),
         measurements: ContactStats::of(results.iter().map(|r| r.measurements() as f64).collect()),
         y_std_first_contact: first.iter().sum::<f64>() / first.len().max(1) as f64,
-        calibration: Some(calibration::samples(results))
+        calibration: Some(&samples)
             .filter(|s| !s.is_empty())
-            .map(|s| Calibration::of(&s)),
+            .map(|s| Calibration::of(s)),
         vision,
         images_missed: results.iter().map(|r| r.images_missed).sum(),
         final_error_mean: results.iter().map(|r| r.final_error).sum::<f64>() / n,
@@ -131,6 +173,7 @@ pub fn summarize(
             .iter()
             .filter(|r| r.success && r.steps.last().is_some_and(|s| s.slide))
             .count(),
+        grip: GripSummary::of(results, &samples),
     }
 }
 
@@ -211,6 +254,20 @@ impl Summary {
                 ),
             ),
             (
+                "grip: final error mean / max, within 2 sigma x / y",
+                self.grip
+                    .as_ref()
+                    .map_or("n/a (grip certain)".to_owned(), |g| {
+                        format!(
+                            "{} / {}, {:.1} / {:.1} %",
+                            mm(g.error_mean),
+                            mm(g.error_max),
+                            100.0 * g.within_2sigma[0],
+                            100.0 * g.within_2sigma[1]
+                        )
+                    }),
+            ),
+            (
                 "trials per second",
                 format!("{:.2}", self.trials_per_second),
             ),
@@ -254,6 +311,8 @@ pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
         "images_missed",
         "wall_s",
         "sim_time_s",
+        "grip_x_m",
+        "grip_y_m",
     ])
     .map_err(io)?;
     for (i, r) in results.iter().enumerate() {
@@ -271,6 +330,8 @@ pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
             r.images_missed.to_string(),
             format!("{:.4}", r.wall),
             format!("{:.4}", r.sim_time),
+            r.grip[0].to_string(),
+            r.grip[1].to_string(),
         ])
         .map_err(io)?;
     }
@@ -303,6 +364,12 @@ pub fn write_measurements_csv(path: &Path, samples: &[Sample]) -> Result<()> {
         "clusters",
         "converged",
         "nees",
+        "true_grip_x_m",
+        "true_grip_y_m",
+        "grip_x_m",
+        "grip_y_m",
+        "grip_x_std_m",
+        "grip_y_std_m",
     ])
     .map_err(io)?;
     for s in samples {
@@ -323,6 +390,12 @@ pub fn write_measurements_csv(path: &Path, samples: &[Sample]) -> Result<()> {
             e.clusters.to_string(),
             e.converged.to_string(),
             format!("{:.6}", s.nees()),
+            s.grip_truth[0].to_string(),
+            s.grip_truth[1].to_string(),
+            m(e.grip[0]),
+            m(e.grip[1]),
+            format!("{:.12}", e.grip_std[0]),
+            format!("{:.12}", e.grip_std[1]),
         ])
         .map_err(io)?;
     }

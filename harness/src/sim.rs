@@ -55,7 +55,11 @@ pub struct Sim {
     actuators: [usize; 4],
     sensors: [usize; 2],
     mocap: usize,
+    /// Body `part_a` and site `ft`: a grip offset moves the one in the carriage and the
+    /// other back, so that the sensor stays where the hand holds it.
+    grip_ids: [usize; 2],
     object: [f64; 2],
+    grip: [f64; 2],
     simulated: f64,
 }
 
@@ -105,6 +109,10 @@ impl Sim {
                 path: scene.to_owned(),
                 reason: "body part_b is not a mocap body".into(),
             })?;
+        let grip_ids = [
+            id(&model, MjtObjBase::mjOBJ_BODY, "body", "part_a")?,
+            id(&model, MjtObjBase::mjOBJ_SITE, "site", "ft")?,
+        ];
         let data = MjData::new(Box::new(model));
         Ok(Self {
             data,
@@ -114,7 +122,9 @@ impl Sim {
             actuators,
             sensors,
             mocap,
+            grip_ids,
             object: [0.0; 2],
+            grip: [0.0; 2],
             simulated: 0.0,
         })
     }
@@ -147,7 +157,10 @@ impl Sim {
     fn motion(&mut self, xy: [f64; 2], mut slide: Option<[f64; 2]>) -> Contact {
         let d = &mut self.data;
         d.reset();
-        d.mocap_pos_mut()[self.mocap] = [self.object[0], self.object[1], 0.0];
+        // The object offset is where the TCP aligns the parts: part B sits that far off, and
+        // the grip's offset farther, under part A.
+        let b = [self.object[0] + self.grip[0], self.object[1] + self.grip[1]];
+        d.mocap_pos_mut()[self.mocap] = [b[0], b[1], 0.0];
         let start = [xy[0], xy[1], self.spec.top + APPROACH_CLEARANCE];
         for (k, &q) in self.qpos.iter().enumerate() {
             d.qpos_mut()[q] = start[k];
@@ -230,6 +243,22 @@ impl Sim {
 impl World for Sim {
     fn set_object(&mut self, xy: [f64; 2]) {
         self.object = xy;
+    }
+
+    /// Moves part A by `xy` in the carriage and the sensor's site back by as much (a copy
+    /// of the model with the new offsets replaces the running one: same layout).
+    fn set_grip(&mut self, xy: [f64; 2]) {
+        if xy == self.grip {
+            return;
+        }
+        let mut model = self.data.model().clone();
+        let [body, site] = self.grip_ids;
+        let [sx, sy, sz] = self.spec.sensor_origin;
+        model.body_pos_mut()[body] = [xy[0], xy[1], 0.0];
+        model.site_pos_mut()[site] = [sx - xy[0], sy - xy[1], sz];
+        // The copy has the running model's layout, so the swap cannot be refused.
+        let _ = self.data.try_swap_model(Box::new(model));
+        self.grip = xy;
     }
 
     fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {

@@ -154,6 +154,29 @@ pub fn next_motion(tcp: [f64; 2], estimate: &Estimate, slide: Option<f64>) -> Mo
     )
 }
 
+/// A trial's true offsets: what the estimator is to find.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Truth {
+    /// The object offset (m): the TCP position at which the parts align (with a grip
+    /// offset, part B sits that much farther off, under part A).
+    pub object: [f64; 2],
+    /// How far off-centre the hand holds part A (m; the paper's r1).
+    pub grip: [f64; 2],
+}
+
+impl Truth {
+    /// Each of `objects` with the grip held as nominal.
+    pub fn objects(objects: &[[f64; 2]]) -> Vec<Self> {
+        objects
+            .iter()
+            .map(|&object| Self {
+                object,
+                grip: [0.0; 2],
+            })
+            .collect()
+    }
+}
+
 /// One contact motion of a trial.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Step {
@@ -174,6 +197,8 @@ pub struct Step {
 pub struct TrialResult {
     /// True object offset (m).
     pub offset: [f64; 2],
+    /// True grip offset (m).
+    pub grip: [f64; 2],
     /// Contact motions made.
     pub contacts: usize,
     /// Whether the part reached the goal depth.
@@ -215,8 +240,8 @@ pub fn spiral(step: f64, radius: f64) -> Vec<[f64; 2]> {
     pts
 }
 
-/// Runs one trial against the true `offset` with seed `seed` (noise and FMU seed); `eye`
-/// adds the camera.
+/// Runs one trial against the true offsets `truth` with seed `seed` (noise and FMU seed);
+/// `eye` adds the camera.
 ///
 /// # Errors
 /// When the FMU or rendering fails.
@@ -225,11 +250,13 @@ pub fn run_trial(
     fmu: Option<&Fmu>,
     mut eye: Option<&mut Eye>,
     cfg: &TrialConfig,
-    offset: [f64; 2],
+    truth: Truth,
     seed: u64,
 ) -> Result<TrialResult> {
     let start = Instant::now();
     let sim_start = sim.simulated();
+    let offset = truth.object;
+    sim.set_grip(truth.grip);
     sim.set_object(offset);
     let mut rng = StdRng::seed_from_u64(seed);
     let mut estimator = match (cfg.strategy, fmu) {
@@ -319,6 +346,7 @@ pub fn run_trial(
     let last = steps.last().map_or([0.0; 2], |s| [s.tcp[0], s.tcp[1]]);
     Ok(TrialResult {
         offset,
+        grip: truth.grip,
         contacts: steps.len(),
         success,
         final_error: (last[0] - offset[0]).hypot(last[1] - offset[1]),

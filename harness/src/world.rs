@@ -38,8 +38,14 @@ pub struct Contact {
 
 /// A work cell that runs contact motions against part B at a true offset.
 pub trait World {
-    /// Places part B at the true object offset (x, y) relative to the nominal goal (m).
+    /// Places part B at the true object offset (x, y) relative to the nominal goal (m): the
+    /// TCP position at which the parts align (with a grip offset, part B sits that much
+    /// farther off, under part A).
     fn set_object(&mut self, xy: [f64; 2]);
+
+    /// Holds part A off-centre in the hand by `xy` (m): the paper's grip offset r1; the F/T
+    /// sensor stays with the hand.
+    fn set_grip(&mut self, xy: [f64; 2]);
 
     /// One contact motion: approach at the commanded task-frame position `xy` (relative to
     /// the nominal goal) with the imposed force until the contact settles.
@@ -64,24 +70,35 @@ pub struct MapWorld {
     /// The map's [`FtMap::contact_depth`].
     contact_depth: Option<f32>,
     geometry: Geometry,
+    /// Whether the map's first two axes are `grip.x`, `grip.y`.
+    has_grip: bool,
     object: [f64; 2],
+    grip: [f64; 2],
 }
 
 impl MapWorld {
-    /// The world of `map` (over `object.x`, `object.y`) for parts of `geometry`.
+    /// The world of `map` (over `object.x`, `object.y`, after `grip.x`, `grip.y` where the
+    /// grip is uncertain) for parts of `geometry`.
     ///
     /// # Errors
-    /// [`HarnessError::MapWorld`] when the map's axes are not exactly `object.x`, `object.y`.
+    /// [`HarnessError::MapWorld`] when the map's axes are not exactly `object.x`, `object.y`
+    /// or `grip.x`, `grip.y`, `object.x`, `object.y`.
     pub fn new(map: FtMap, geometry: Geometry) -> Result<Self> {
-        let is = |k: usize, axis| {
+        let is = |k: usize, pose, axis| {
             map.grid()
                 .axes()
                 .get(k)
-                .is_some_and(|a| a.dof.pose == Pose::Object && a.dof.axis == axis)
+                .is_some_and(|a| a.dof.pose == pose && a.dof.axis == axis)
         };
-        if map.grid().ndim() != 2 || !is(0, Axis::X) || !is(1, Axis::Y) {
+        let object_at = |k| is(k, Pose::Object, Axis::X) && is(k + 1, Pose::Object, Axis::Y);
+        let has_grip = map.grid().ndim() == 4
+            && is(0, Pose::Grip, Axis::X)
+            && is(1, Pose::Grip, Axis::Y)
+            && object_at(2);
+        let planar = map.grid().ndim() == 2 && object_at(0);
+        if !(has_grip || planar) {
             return Err(HarnessError::MapWorld(format!(
-                "its axes are {}, the map world needs object.x, object.y",
+                "its axes are {}, the map world needs object.x, object.y, after grip.x, grip.y or alone",
                 map.grid()
                     .axes()
                     .iter()
@@ -94,7 +111,9 @@ impl MapWorld {
             contact_depth: map.contact_depth(),
             map,
             geometry,
+            has_grip,
             object: [0.0; 2],
+            grip: [0.0; 2],
         })
     }
 
@@ -109,9 +128,14 @@ impl MapWorld {
         let offset = self.offset(xy);
         let inserted = self.geometry.inserts(offset);
         // The map's axes were checked: the coordinates fit its grid.
+        let coords = if self.has_grip {
+            vec![self.grip[0], self.grip[1], offset[0], offset[1]]
+        } else {
+            offset.to_vec()
+        };
         let cell = self
             .map
-            .interpolate_contact(&offset, self.contact_depth)
+            .interpolate_contact(&coords, self.contact_depth)
             .unwrap_or([0.0; NCH]);
         let mut raw = [0.0; 6];
         for (r, w) in raw.iter_mut().zip(&cell) {
@@ -130,6 +154,11 @@ impl MapWorld {
 impl World for MapWorld {
     fn set_object(&mut self, xy: [f64; 2]) {
         self.object = xy;
+    }
+
+    /// Reads the map at the grip offset; ignored on a map without grip axes.
+    fn set_grip(&mut self, xy: [f64; 2]) {
+        self.grip = xy;
     }
 
     fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {

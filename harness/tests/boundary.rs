@@ -14,7 +14,7 @@ const TOLERANCE: f64 = 10e-6;
 #[test]
 fn every_scene_stops_insertion_where_the_geometry_does() {
     let tasks = tasks_with_scenes().unwrap();
-    assert_eq!(tasks.len(), 5);
+    assert_eq!(tasks.len(), 6);
     for task in &tasks {
         let mut sim = Sim::of_task(task).unwrap();
         let found = boundaries(&mut sim, task, &directions(8)).unwrap();

@@ -6,7 +6,7 @@ use harness::campaign::{random_offsets, run_campaign};
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::Noise;
 use harness::sim::{Sim, open_task};
-use harness::trial::{Strategy, TrialConfig};
+use harness::trial::{Strategy, TrialConfig, Truth};
 
 mod common;
 
@@ -35,8 +35,8 @@ fn five_trials_succeed_within(
         },
     };
     let offsets = random_offsets(5, task.omega.size_trans, 7);
-    let results =
-        run_campaign(sim, Some(&fmu), None, &cfg, &offsets, 7).expect("the campaign runs");
+    let results = run_campaign(sim, Some(&fmu), None, &cfg, &Truth::objects(&offsets), 7)
+        .expect("the campaign runs");
     let clearance = task.geometry().expect("a [geometry]").clearance()
         + chamfer_yield(task).expect("a [geometry]");
     for r in &results {

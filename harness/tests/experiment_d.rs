@@ -10,7 +10,7 @@ use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::scene::{SceneSpec, scene_path};
 use harness::sensor::Noise;
 use harness::sim::Sim;
-use harness::trial::{Strategy, TrialConfig, TrialResult};
+use harness::trial::{Strategy, TrialConfig, TrialResult, Truth};
 
 /// `trials` bearing-housing trials (seed 3), with the camera when `vision`.
 fn campaign(trials: usize, vision: bool) -> Vec<TrialResult> {
@@ -44,8 +44,15 @@ fn campaign(trials: usize, vision: bool) -> Vec<TrialResult> {
         },
     };
     let offsets = random_offsets(trials, task.omega.size_trans, 3);
-    let results = run_campaign(&mut sim, Some(&fmu), eye.as_mut(), &cfg, &offsets, 3)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let results = run_campaign(
+        &mut sim,
+        Some(&fmu),
+        eye.as_mut(),
+        &cfg,
+        &Truth::objects(&offsets),
+        3,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     if let Some(p) = vision_file {
         let _ = std::fs::remove_file(p);
     }

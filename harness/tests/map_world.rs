@@ -10,7 +10,7 @@ use ftmap::Task;
 use harness::campaign::{random_offsets, run_campaign};
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::{Noise, map_wrench};
-use harness::trial::{Strategy, TrialConfig};
+use harness::trial::{Strategy, TrialConfig, Truth};
 use harness::world::{MapWorld, World};
 
 fn peg_world() -> (MapWorld, f64) {
@@ -125,8 +125,15 @@ fn in_a_world_without_mismatch_the_defaults_insert_the_peg_in_two_and_a_half_con
     };
     let task = Task::find("peg_in_hole").expect("task peg_in_hole");
     let offsets = random_offsets(100, task.omega.size_trans, 7);
-    let results =
-        run_campaign(&mut world, Some(&fmu), None, &cfg, &offsets, 7).expect("the campaign runs");
+    let results = run_campaign(
+        &mut world,
+        Some(&fmu),
+        None,
+        &cfg,
+        &Truth::objects(&offsets),
+        7,
+    )
+    .expect("the campaign runs");
     let failed: Vec<_> = results.iter().filter(|r| !r.success).collect();
     let mean = results.iter().map(|r| r.contacts as f64).sum::<f64>() / results.len() as f64;
     assert!(failed.is_empty(), "{failed:?}");

@@ -15,10 +15,11 @@ const CLUSTER_SHARE: f64 = 0.05;
 pub struct Estimate {
     /// Estimated pose value per map axis (m or rad).
     pub pose: Vec<f64>,
-    /// Weighted root-mean-square distance of the dominant cluster from the estimate per map
-    /// axis: the estimate's expected error (about the cluster's mean when the two agree).
+    /// Weighted root-mean-square distance of every particle from the estimate per map axis:
+    /// the estimate's expected error, the other clusters included (about the dominant
+    /// cluster's spread when it holds the weight).
     pub std: Vec<f64>,
-    /// Correlation of the `object.x` and `object.y` axes over the dominant cluster about the
+    /// Correlation of the `object.x` and `object.y` axes over the particles about the
     /// estimate (0 unless the map has both).
     pub xy_corr: f64,
     /// Weight within the confidence radius of the estimate (0..1).
@@ -128,7 +129,8 @@ impl Estimate {
             .iter()
             .map(|s| if near_w > 0.0 { s / near_w } else { 0.0 })
             .collect();
-        // The cluster's mean squared distance from the estimate, and the x-y cross term.
+        // Every particle's mean squared distance from the estimate (the other clusters are
+        // where the truth may be too), and the x-y cross term.
         let object = |axis| {
             axes.iter()
                 .position(|a| a.dof.pose == Pose::Object && a.dof.axis == axis)
@@ -136,8 +138,8 @@ impl Estimate {
         let xy = object(Axis::X).zip(object(Axis::Y));
         let mut var = vec![0.0f64; d];
         let (mut cov_xy, mut cluster_w) = (0.0, 0.0);
-        for &c in &members {
-            for &(_, i) in &order[cells[c].2..cells[c].3] {
+        for cell in &cells {
+            for &(_, i) in &order[cell.2..cell.3] {
                 let i = i as usize;
                 let e = |k: usize| f64::from(pos[k * n + i]) - est[k];
                 for (k, v) in var.iter_mut().enumerate() {
@@ -167,11 +169,22 @@ impl Estimate {
             .unwrap_or_else(|| axes.iter().map(|a| a.step).fold(f64::INFINITY, f64::min));
         let r = cfg.confidence_radius / ref_step;
         let r2 = r * r;
+        // Translations in that interval's units, rotations in their own grid intervals.
+        let scale: Vec<f64> = axes
+            .iter()
+            .map(|a| {
+                if a.dof.is_rotation() {
+                    1.0
+                } else {
+                    a.step / ref_step
+                }
+            })
+            .collect();
         let mut confidence = 0.0;
         for i in 0..n {
             let dist2: f64 = (0..d)
                 .map(|k| {
-                    let e = f64::from(pos[k * n + i]) - est[k];
+                    let e = (f64::from(pos[k * n + i]) - est[k]) * scale[k];
                     e * e
                 })
                 .sum();

@@ -461,8 +461,9 @@ impl Filter {
     /// iterations together moves a particle by about [`JITTER_SPREAD`] of the spread: a
     /// fixed jitter would blur a posterior narrower than it (the last tens of micrometres
     /// of a fit) and with it what the earlier contacts said. It never falls below that
-    /// share of the fit's clearance (of one grid interval where the map has none), so that
-    /// a set that has collapsed off the truth can still move.
+    /// share of the fit's clearance on the object's translations (of one grid interval on
+    /// other axes, the grip's included, and where the map has no clearance), so that a set
+    /// that has collapsed off the truth can still move.
     fn jitter(&mut self) {
         let n = self.cfg.particles;
         let s = self.cfg.jitter as f32;

@@ -9,8 +9,10 @@
 //! A slide under force that did not go in says the same of every point it passed: the
 //! term then rules out the particles within the clearance of the swept line.
 //!
-//! It applies to maps over object translations only (`object.x`, `object.y`): with a
-//! rotation error part A may not go in even within the clearance.
+//! It applies to maps over `object.x`, `object.y`, with grip translations besides (a grip
+//! offset moves part A in the hand, and the object coordinates are the TCP position that
+//! aligns the parts whatever it is): with a rotation error part A may not go in even
+//! within the clearance.
 
 use ftmap::{Axis, Pose};
 
@@ -27,18 +29,28 @@ pub struct NegativeContact {
     pub clearance: f64,
     x: MapAxis,
     y: MapAxis,
+    /// The particles' axis indices of `x` and `y`.
+    axes: [usize; 2],
 }
 
 impl NegativeContact {
-    /// The term for a map with `axes`, when they are exactly `object.x`, `object.y` and the
-    /// clearance is positive.
+    /// The term for a map with `axes`, when they are `object.x`, `object.y` and grip
+    /// translations, and the clearance is positive.
     pub fn new(axes: &[MapAxis], clearance: f64) -> Option<Self> {
-        let is = |a: &MapAxis, axis| a.dof.pose == Pose::Object && a.dof.axis == axis;
-        match axes {
-            [x, y] if is(x, Axis::X) && is(y, Axis::Y) && clearance > 0.0 => Some(Self {
+        let find = |axis| {
+            axes.iter()
+                .position(|a| a.dof.pose == Pose::Object && a.dof.axis == axis)
+        };
+        let others_are_grip_translations = axes.iter().all(|a| {
+            (a.dof.pose == Pose::Object && matches!(a.dof.axis, Axis::X | Axis::Y))
+                || (a.dof.pose == Pose::Grip && !a.dof.axis.is_rotation())
+        });
+        match (find(Axis::X), find(Axis::Y)) {
+            (Some(i), Some(j)) if others_are_grip_translations && clearance > 0.0 => Some(Self {
                 clearance,
-                x: *x,
-                y: *y,
+                x: axes[i],
+                y: axes[j],
+                axes: [i, j],
             }),
             _ => None,
         }
@@ -67,7 +79,9 @@ impl NegativeContact {
             (self.y.coord(from[1]) - cy) * sy,
         );
         let len2 = ax * ax + ay * ay;
-        for ((l, &u), &v) in ll.iter_mut().zip(&pos[..n]).zip(&pos[n..2 * n]) {
+        let [i, j] = self.axes;
+        let (us, vs) = (&pos[i * n..(i + 1) * n], &pos[j * n..(j + 1) * n]);
+        for ((l, &u), &v) in ll.iter_mut().zip(us).zip(vs) {
             let (dx, dy) = ((u - cx) * sx, (v - cy) * sy);
             // The nearest point of the segment, as a share of the way from `to` to `from`.
             let t = if len2 > 0.0 {

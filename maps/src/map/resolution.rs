@@ -52,14 +52,19 @@ pub fn too_coarse(grid: &Grid, pixel: f64, clearance: Option<f64>) -> Vec<Coarse
     if coarse(pixel) {
         found.push(Coarse::Pixel { pixel, gap });
     }
+    // The FMU's negative contact states the fit exactly on maps over object.x, object.y
+    // (grip translations besides, which only move the sensor's lever: any step is exact).
     let planar = grid.axes().iter().all(|a| {
-        a.count == 1 || (a.dof.pose == Pose::Object && matches!(a.dof.axis, Axis::X | Axis::Y))
+        a.count == 1
+            || (a.dof.pose == Pose::Object && matches!(a.dof.axis, Axis::X | Axis::Y))
+            || (a.dof.pose == Pose::Grip && !a.dof.axis.is_rotation())
     });
     if !planar {
         found.extend(
             grid.axes()
                 .iter()
-                .filter(|a| a.count > 1 && !a.dof.axis.is_rotation() && coarse(a.step))
+                .filter(|a| a.count > 1 && a.dof.pose == Pose::Object)
+                .filter(|a| !a.dof.axis.is_rotation() && coarse(a.step))
                 .map(|a| Coarse::Step {
                     dof: a.dof,
                     step: a.step,
@@ -87,7 +92,7 @@ impl fmt::Display for Coarse {
                 "{dof}'s step {:.4} mm is wider than the fit's diametral gap {:.4} mm: the \
                  cells where the part goes in fall between the grid's nodes (the FMU's negative \
                  contact, which states them exactly, applies to maps over object.x, object.y \
-                 only); set the step <= {:.4} mm",
+                 and grip translations only); set the step <= {:.4} mm",
                 step * mm,
                 gap * mm,
                 gap * mm
@@ -138,9 +143,12 @@ mod tests {
             })
             .collect();
         assert_eq!(dofs, ["object.x", "object.y"]);
-        // A grip offset is not the object's x, y either.
-        let grip = (Pose::Grip, Axis::X, 1e-4);
-        assert_eq!(too_coarse(&grid(&[grip, x, y]), 2e-5, Some(2e-5)).len(), 3);
+        // A grip translation only moves the sensor's lever: the negative contact still states
+        // the fit, at any grip step; a grip rotation does not, and the object's steps count.
+        let grip = (Pose::Grip, Axis::X, 1e-3);
+        assert!(too_coarse(&grid(&[grip, x, y]), 2e-5, Some(2e-5)).is_empty());
+        let tilt = (Pose::Grip, Axis::Rx, 0.01);
+        assert_eq!(too_coarse(&grid(&[tilt, x, y]), 2e-5, Some(2e-5)).len(), 2);
         // No clearance known (a user's meshes without [geometry]): nothing to say.
         assert!(too_coarse(&grid(&[x, y, rz]), 1.0, None).is_empty());
     }

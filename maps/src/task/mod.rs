@@ -53,6 +53,15 @@ pub struct Omega {
     pub size_trans: f64,
     /// Translational step (m).
     pub delta_trans: f64,
+    /// Bound of the grip's translations (m): values lie in [-size_grip, size_grip];
+    /// default `size_trans`.
+    #[serde(default)]
+    pub size_grip: Option<f64>,
+    /// Step of the grip's translations (m); default `delta_trans`. A grip translation moves
+    /// only the sensor's lever, to which the wrench is linear: the map's interpolation is
+    /// exact across it at any step.
+    #[serde(default)]
+    pub delta_grip: Option<f64>,
     /// Rotational bound (rad).
     #[serde(default)]
     pub size_rot: f64,
@@ -323,6 +332,12 @@ impl Task {
             .map(|dof| {
                 if dof.is_rotation() {
                     GridAxis::symmetric(dof, o.size_rot, o.delta_rot)
+                } else if dof.pose == Pose::Grip {
+                    GridAxis::symmetric(
+                        dof,
+                        o.size_grip.unwrap_or(o.size_trans),
+                        o.delta_grip.unwrap_or(o.delta_trans),
+                    )
                 } else {
                     GridAxis::symmetric(dof, o.size_trans, o.delta_trans)
                 }
