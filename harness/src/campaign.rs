@@ -270,16 +270,16 @@ impl Campaign {
             Offsets::Random { trials, .. } => random_offsets(trials, size, self.options.seed),
             Offsets::Grid { points, .. } => grid_offsets(points, size),
         };
-        let grips = match self.task.grid() {
-            Ok(g) if g.axes().iter().any(|a| a.dof.pose == Pose::Grip) => {
-                let bound = self
-                    .task
-                    .omega
-                    .size_grip
-                    .unwrap_or(self.task.omega.size_trans);
-                random_offsets(objects.len(), bound, self.options.seed ^ GRIP_STREAM)
-            }
-            _ => vec![[0.0; 2]; objects.len()],
+        // The grid's own grip bound (the task's `size_grip`, its default resolved there).
+        let grip_bound = self.task.grid().ok().and_then(|g| {
+            g.axes()
+                .iter()
+                .find(|a| a.dof.pose == Pose::Grip)
+                .map(|a| a.max())
+        });
+        let grips = match grip_bound {
+            Some(bound) => random_offsets(objects.len(), bound, self.options.seed ^ GRIP_STREAM),
+            None => vec![[0.0; 2]; objects.len()],
         };
         objects
             .into_iter()

@@ -375,6 +375,7 @@ pub fn write_measurements_csv(path: &Path, samples: &[Sample]) -> Result<()> {
     for s in samples {
         let e = &s.estimate;
         let m = |v: f64| format!("{v:.9}");
+        let sd = |v: f64| format!("{v:.12}");
         w.write_record([
             s.trial.to_string(),
             s.measurement.to_string(),
@@ -383,8 +384,8 @@ pub fn write_measurements_csv(path: &Path, samples: &[Sample]) -> Result<()> {
             s.truth[1].to_string(),
             m(e.object[0]),
             m(e.object[1]),
-            format!("{:.12}", e.std[0]),
-            format!("{:.12}", e.std[1]),
+            sd(e.std[0]),
+            sd(e.std[1]),
             format!("{:.6}", e.corr),
             format!("{:.4}", e.confidence),
             e.clusters.to_string(),
@@ -394,8 +395,8 @@ pub fn write_measurements_csv(path: &Path, samples: &[Sample]) -> Result<()> {
             s.grip_truth[1].to_string(),
             m(e.grip[0]),
             m(e.grip[1]),
-            format!("{:.12}", e.grip_std[0]),
-            format!("{:.12}", e.grip_std[1]),
+            sd(e.grip_std[0]),
+            sd(e.grip_std[1]),
         ])
         .map_err(io)?;
     }
