@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # The main job on a fresh Debian machine: installs what is needed (scripts/setup.sh),
-# builds, computes the peg-in-hole FT-Map, packages FtFusion.fmu and runs the default
-# trial campaign (peg_in_hole, 20 trials, MuJoCo driving the FMU through FMI calls), the
-# tight fit's (tight_peg, 0.02 mm radial clearance, 100 trials), then experiment D
-# (bearing_housing, 20 trials with the camera fused and 20 with force only). The reports
-# land in runs/peg/, runs/tight/, runs/d_vision/, runs/d_force/ (trials.csv, summary.json,
-# estimates.png).
+# builds, computes the peg-in-hole FT-Map, packages FtFusion.fmu and runs a campaign of
+# every task, MuJoCo driving the FMU through FMI calls: peg_in_hole (20 trials), the tight
+# fit (tight_peg, 0.02 mm radial clearance, 100 trials), the octagon and the gear (20
+# each), the grip offset (peg_grip, 20), the octagon's yaw (octagon_yaw, 20), then
+# experiment D (bearing_housing, 20 trials with the camera fused and 20 with force only),
+# and prints them in one table. The reports land in runs/<name>/ (trials.csv,
+# measurements.csv, summary.json, estimates.png).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -20,8 +21,13 @@ target/release/harness scene --check
 target/release/harness boundary                  # where each scene accepts part A, against the geometry
 target/release/harness trials --task peg_in_hole --trials 20 --seed 7 --out runs/peg
 target/release/harness trials --task tight_peg --trials 100 --seed 61 --out runs/tight
+target/release/harness trials --task octagon --trials 20 --seed 9 --out runs/octagon
+target/release/harness trials --task gear --trials 20 --seed 9 --out runs/gear
+target/release/harness trials --task peg_grip --trials 20 --seed 22 --out runs/grip
+target/release/harness trials --task octagon_yaw --trials 20 --seed 13 --out runs/octagon_yaw
 target/release/harness trials --task bearing_housing --trials 20 --seed 3 --vision --out runs/d_vision
 target/release/harness trials --task bearing_housing --trials 20 --seed 3 --out runs/d_force
 target/release/harness compare-runs runs/d_vision runs/d_force --plot runs/d_compare.png
 target/release/harness render --task bearing_housing --out out/d.png
-echo "main: report in runs/peg/ (summary.json, trials.csv, estimates.png), the tight fit in runs/tight/, experiment D in runs/d_vision/ and runs/d_force/ (compared: runs/d_compare.png); map out/peg.ftmap, plot out/peg_ty.png, camera image out/d.png"
+target/release/harness table runs/peg runs/tight runs/octagon runs/gear runs/grip runs/octagon_yaw runs/d_force runs/d_vision | tee runs/table.md
+echo "main: every campaign above (runs/table.md; each in runs/<name>/: summary.json, trials.csv, measurements.csv, estimates.png), experiment D compared in runs/d_compare.png; map out/peg.ftmap, plot out/peg_ty.png, camera image out/d.png"

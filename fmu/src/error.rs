@@ -40,6 +40,14 @@ pub enum FusionError {
     /// and why).
     #[error("vision model file unreadable")]
     VisionFile(#[source] ftmap::MapError),
+    /// The trace file cannot be opened for appending.
+    #[error("trace file {}: {reason}", path.display())]
+    Trace {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// A measurement with NaN or infinite values.
     #[error("input `{name}` is {value}: measurement skipped")]
     NonFinite {

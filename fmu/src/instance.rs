@@ -10,6 +10,7 @@ use model_description::{self as md, Causality, VARIABLES, VarType};
 use crate::error::{FusionError, Result};
 use crate::filter::{Filter, Measurement, Reader, VisionMeasurement, VisionSense, Writer};
 use crate::params::{Params, Store, Value, index_of, index_of_vr};
+use crate::trace::Trace;
 
 /// First bytes of a saved FMU state.
 pub const STATE_MAGIC: [u8; 8] = *b"FTFSTATE";
@@ -147,7 +148,7 @@ struct Io {
     tcp: [usize; 6],
     contact: usize,
     slide: usize,
-    slide_start: [usize; 2],
+    slide_start: [usize; 3],
     /// vision.left_distance, right_distance, passive_left, passive_right.
     vision: [usize; 4],
     vision_valid: usize,
@@ -198,6 +199,8 @@ pub struct Instance {
     mode: Mode,
     store: Store,
     filter: Option<Filter>,
+    /// Where each measurement's particles go (`trace`), when it names a file.
+    trace: Option<Trace>,
     prev_contact: bool,
     prev_valid: bool,
     time: f64,
@@ -225,6 +228,7 @@ impl Instance {
             mode: Mode::Instantiated,
             store: Store::default(),
             filter: None,
+            trace: None,
             prev_contact: false,
             prev_valid: false,
             time: 0.0,
@@ -351,16 +355,19 @@ impl Instance {
     /// fmi2ExitInitializationMode: checks the parameters, loads the map, spreads the particles.
     pub fn exit_initialization_mode(&mut self) -> Result<Status> {
         self.check(Call::ExitInitializationMode)?;
-        self.filter = Some(self.new_filter(&self.store)?);
+        let (filter, trace) = self.new_filter(&self.store)?;
+        self.filter = Some(filter);
+        self.trace = trace;
         self.write_outputs();
         self.mode = Mode::StepComplete;
         Ok(Status::Ok)
     }
 
     /// The filter the parameters in `store` make: checked, its map (and vision model) loaded,
-    /// the particles spread.
-    fn new_filter(&self, store: &Store) -> Result<Filter> {
+    /// the particles spread; and its trace file, opened, when `trace` names one.
+    fn new_filter(&self, store: &Store) -> Result<(Filter, Option<Trace>)> {
         let params = Params::from_store(store)?;
+        let trace = params.trace.as_deref().map(Trace::open).transpose()?;
         let path = self
             .resource_path(&params.map)
             .map_err(|(path, reason)| FusionError::Map { path, reason })?;
@@ -408,12 +415,7 @@ impl Instance {
                 ),
             );
         }
-        let dofs: Vec<String> = filter
-            .lookup()
-            .axes()
-            .iter()
-            .map(|a| a.dof.to_string())
-            .collect();
+        let dofs = filter.lookup().dof_names();
         self.log(
             Status::Ok,
             "logFilter",
@@ -425,7 +427,7 @@ impl Instance {
                 params.config.particles
             ),
         );
-        Ok(filter)
+        Ok((filter, trace))
     }
 
     /// fmi2Terminate.
@@ -441,6 +443,7 @@ impl Instance {
         self.mode = Mode::Instantiated;
         self.store = Store::default();
         self.filter = None;
+        self.trace = None;
         self.prev_contact = false;
         self.prev_valid = false;
         self.time = 0.0;
@@ -619,6 +622,20 @@ impl Instance {
                     );
                     status = Status::Warning;
                 }
+                if let (Some(trace), Some(filter)) = (self.trace.as_mut(), self.filter.as_ref())
+                    && let Err(e) = trace.append(filter.measurements(), filter)
+                {
+                    let path = trace.path().display().to_string();
+                    self.log(
+                        Status::Warning,
+                        "logStatusWarning",
+                        &format!(
+                            "t = {}: the particles could not be appended to trace file {path}: {e}",
+                            self.time
+                        ),
+                    );
+                    status = Status::Warning;
+                }
                 // Not a warning: the filter handled the measurement as designed, and
                 // importers (the FMI reference importer among them) end a run at one.
                 if report.respread > 0 {
@@ -721,6 +738,7 @@ impl Instance {
             // A state saved before initialization takes the instance back there.
             (Some(_), false) if r.done() => {
                 self.filter = None;
+                self.trace = None;
                 self.mode = Mode::Instantiated;
             }
             (Some(_), false) => {
@@ -732,7 +750,7 @@ impl Instance {
             // allows it; the reference importer restores a saved run this way): initialize
             // with the saved parameters, then restore the filter.
             (None, true) => {
-                let mut filter = self.new_filter(&store).map_err(|e| {
+                let (mut filter, trace) = self.new_filter(&store).map_err(|e| {
                     FusionError::State(format!(
                         "its parameters do not initialize this instance: {}",
                         crate::error::report(&e)
@@ -745,6 +763,7 @@ impl Instance {
                     ));
                 }
                 self.filter = Some(filter);
+                self.trace = trace;
                 self.mode = Mode::StepComplete;
             }
         }

@@ -6,6 +6,7 @@ pub mod fmi2;
 pub mod instance;
 pub mod params;
 pub mod shared;
+pub mod trace;
 
 pub use error::{FusionError, Result};
 pub use filter::{Config, Estimate, Filter, Interpolation, Measurement, Report};

@@ -147,6 +147,8 @@ pub struct Params {
     pub vision_method: VisionMethod,
     /// The filter settings.
     pub config: Config,
+    /// The `trace` parameter (`None`: empty, no trace).
+    pub trace: Option<std::path::PathBuf>,
 }
 
 /// `[min, max]` of a table variable as text.
@@ -224,12 +226,16 @@ impl Params {
         } else {
             VisionMethod::Recalibration
         };
+        let trace = Some(store.string(index_of("trace")).trim())
+            .filter(|t| !t.is_empty())
+            .map(std::path::PathBuf::from);
         Ok(Self {
             map,
             config,
             vision,
             sigma_vision,
             vision_method,
+            trace,
         })
     }
 }

@@ -12,7 +12,7 @@
 use serde::Serialize;
 
 use crate::fmu_driver::Estimate;
-use crate::trial::TrialResult;
+use crate::trial::{TrialResult, rotation_error};
 
 /// Spreads below this (m) count as this: a collapsed spread gives a huge, not an infinite,
 /// NEES.
@@ -37,6 +37,11 @@ pub struct Sample {
     pub truth: [f64; 2],
     /// The true grip offset (m).
     pub grip_truth: [f64; 2],
+    /// The true rotation of part B (rotation vector, rad).
+    pub rot_truth: [f64; 3],
+    /// The estimate's rotation error, R_estimate^T R_true as a rotation vector (rad), yaw
+    /// modulo the fit's symmetry.
+    pub rot_error: [f64; 3],
     /// The FMU's outputs after the measurement.
     pub estimate: Estimate,
 }
@@ -46,6 +51,19 @@ impl Sample {
     pub fn z(&self) -> [f64; 2] {
         std::array::from_fn(|k| {
             (self.estimate.object[k] - self.truth[k]) / self.estimate.std[k].max(MIN_STD)
+        })
+    }
+
+    /// Error of the rotation estimate in units of its reported spread, per axis (0 where
+    /// the rotation is certain: no spread and no error).
+    pub fn rot_z(&self) -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let e = self.rot_error[k];
+            if e == 0.0 {
+                0.0
+            } else {
+                e / self.estimate.rot_std[k].max(MIN_STD)
+            }
         })
     }
 
@@ -80,6 +98,8 @@ pub fn samples(results: &[TrialResult]) -> Vec<Sample> {
                     image,
                     truth: r.offset,
                     grip_truth: r.grip,
+                    rot_truth: r.rot,
+                    rot_error: rotation_error(estimate.rot, r.rot, r.symmetry),
                     estimate,
                 })
         })
@@ -165,6 +185,8 @@ mod tests {
             image: false,
             truth: [1e-3, -2e-3],
             grip_truth: [0.0; 2],
+            rot_truth: [0.0; 3],
+            rot_error: [0.0; 3],
             estimate: Estimate {
                 object: [1e-3 + error[0], -2e-3 + error[1]],
                 std,

@@ -13,6 +13,7 @@ use rand::{Rng, SeedableRng};
 
 use ftmap::map::format;
 use ftmap::map::resolution::{Coarse, too_coarse};
+use ftmap::task::omega::GridAxis;
 use ftmap::{Axis, Pose, Task};
 
 use crate::calibration;
@@ -23,9 +24,10 @@ use crate::plot;
 use crate::report::{self, Summary};
 use crate::sensor::Noise;
 use crate::sim::Sim;
-use crate::trial::{Strategy, TrialConfig, TrialResult, Truth, run_trial, spiral};
+use crate::trial::{Strategy, TrialConfig, TrialResult, Truth, Twist, run_trial, spiral};
 use crate::vision::Detector;
 use crate::world::{MapWorld, World, WorldKind};
+use model_description::trace;
 
 /// How the FMU evaluates particles by vision (its `vision_method` parameter).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -96,6 +98,8 @@ pub struct CampaignOptions {
     pub sensor_noise: bool,
     /// Slides under force across the estimate's spread ([`crate::trial::next_motion`]).
     pub slide: bool,
+    /// Twists under force about z where the yaw is uncertain ([`crate::trial::next_motion`]).
+    pub twist: bool,
     /// The FMU (default: [`default_fmu_path`]).
     pub fmu: Option<PathBuf>,
     /// Most contact motions per trial (default: 30 for pf; enough to cover Omega for spiral).
@@ -174,12 +178,15 @@ pub struct Outcome {
 /// A plot a campaign wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CampaignPlot {
-    /// `estimates.png`: one trial's estimate and spread after its first measurements.
+    /// `estimates.png`: one trial's estimate and spread after its first measurements; and
+    /// `particles.png`: the first trial's particles, from the FMU's trace.
     Estimates {
         /// The image file.
         path: PathBuf,
         /// The trial shown.
         trial: usize,
+        /// The particles' image file, where the first trial made a measurement.
+        particles: Option<PathBuf>,
     },
     /// `sweep.png`: contacts per true offset.
     Sweep {
@@ -191,11 +198,25 @@ pub enum CampaignPlot {
 impl fmt::Display for CampaignPlot {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Estimates { path, trial } => write!(
-                f,
-                "plot {} (trial {trial}: estimate and 1/2-sigma ellipse after its first three measurements; the FMU exposes no particles)",
-                path.display()
-            ),
+            Self::Estimates {
+                path,
+                trial,
+                particles,
+            } => {
+                write!(
+                    f,
+                    "plot {} (trial {trial}: estimate and 1/2-sigma ellipse after its first three measurements)",
+                    path.display()
+                )?;
+                match particles {
+                    Some(p) => write!(
+                        f,
+                        "\nplot {} (trial 0: the FMU's particles after its first three measurements, from trace.csv)",
+                        p.display()
+                    ),
+                    None => Ok(()),
+                }
+            }
             Self::Sweep { path } => write!(f, "plot {}", path.display()),
         }
     }
@@ -281,10 +302,20 @@ impl Campaign {
             Some(bound) => random_offsets(objects.len(), bound, self.options.seed ^ GRIP_STREAM),
             None => vec![[0.0; 2]; objects.len()],
         };
+        let rotations = random_rotations(
+            objects.len(),
+            &self
+                .task
+                .grid()
+                .map(|g| g.axes().to_vec())
+                .unwrap_or_default(),
+            self.options.seed ^ ROTATION_STREAM,
+        );
         objects
             .into_iter()
             .zip(grips)
-            .map(|(object, grip)| Truth { object, grip })
+            .zip(rotations)
+            .map(|((object, grip), rot)| Truth { object, grip, rot })
             .collect()
     }
 
@@ -294,6 +325,16 @@ impl Campaign {
     /// When the FMU or rendering fails.
     pub fn run(&mut self) -> Result<Outcome> {
         let truths = self.truths();
+        // The FMU appends to its trace: start it afresh.
+        if let Some(file) = &self.config.settings.trace {
+            create_dir(&self.options.out)?;
+            match std::fs::remove_file(file) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(HarnessError::io(file, e));
+                }
+                _ => {}
+            }
+        }
         let (results, wall) = timed(|| {
             run_campaign(
                 self.world.as_mut(),
@@ -323,7 +364,7 @@ impl Campaign {
             &calibration::samples(&outcome.results),
         )?;
         let summary = report::summarize(
-            &self.task.name,
+            &self.task,
             &self.options.world,
             self.options.strategy,
             self.options.sensor_noise,
@@ -354,7 +395,12 @@ impl Campaign {
                 };
                 let path = self.options.out.join("estimates.png");
                 plot::estimates(&path, r, self.task.omega.size_trans)?;
-                Ok(Some(CampaignPlot::Estimates { path, trial }))
+                let particles = self.plot_particles(results)?;
+                Ok(Some(CampaignPlot::Estimates {
+                    path,
+                    trial,
+                    particles,
+                }))
             }
             Offsets::Random { .. } => Ok(None),
             Offsets::Grid { points, .. } => {
@@ -369,6 +415,47 @@ impl Campaign {
                 Ok(Some(CampaignPlot::Sweep { path }))
             }
         }
+    }
+}
+
+impl Campaign {
+    /// `particles.png` of the first trial from its trace (`trace.csv`), where it made a
+    /// measurement.
+    ///
+    /// # Errors
+    /// When the trace cannot be read or the image written.
+    fn plot_particles(&self, results: &[TrialResult]) -> Result<Option<PathBuf>> {
+        let (Some(file), Some(first)) = (&self.config.settings.trace, results.first()) else {
+            return Ok(None);
+        };
+        if first.measurements() == 0 {
+            return Ok(None);
+        }
+        let text = std::fs::File::open(file).map_err(|e| HarnessError::io(file, e))?;
+        let measurements = trace::read(text).map_err(|e| HarnessError::Invalid {
+            what: "trace",
+            reason: format!("{}: {e}", file.display()),
+        })?;
+        let Some(m) = measurements.first() else {
+            return Ok(None);
+        };
+        let truth: Vec<f64> = m
+            .dofs
+            .iter()
+            .map(|d| match d.as_str() {
+                "object.x" => first.offset[0],
+                "object.y" => first.offset[1],
+                "object.rx" => first.rot[0],
+                "object.ry" => first.rot[1],
+                "object.rz" => first.rot[2],
+                "grip.x" => first.grip[0],
+                "grip.y" => first.grip[1],
+                _ => 0.0,
+            })
+            .collect();
+        let path = self.options.out.join("particles.png");
+        plot::particles(&path, &measurements, &truth)?;
+        Ok(Some(path))
     }
 }
 
@@ -428,6 +515,28 @@ fn cached_map(task: &Task, note: &mut dyn FnMut(SetupNote)) -> Result<PathBuf> {
     Ok(path)
 }
 
+/// The twist of a task whose yaw is uncertain, from its map (the fit's yaw play there) and
+/// geometry; `None` for another task, or where the map shows no play or is the FMU's own.
+fn twist_setup(task: &Task, map: Option<&Path>) -> Result<Option<Twist>> {
+    let Some(file) = map else {
+        return Ok(None);
+    };
+    let grid = task.grid()?;
+    let Some(k) = grid.axis_of(ftmap::Dof::new(Pose::Object, Axis::Rz)) else {
+        return Ok(None);
+    };
+    let (m, _) = format::load_any(file)?;
+    let play = m.rotational_play(k);
+    Ok((play > 0.0).then(|| Twist {
+        clearance: task.geometry().map_or(0.0, |g| g.clearance()),
+        play,
+        period: task
+            .omega
+            .symmetry
+            .map(|n| std::f64::consts::TAU / f64::from(n)),
+    }))
+}
+
 /// The trial limits and FMU settings of a campaign, with the FT-Map file `map`.
 fn trial_config(
     options: &CampaignOptions,
@@ -451,6 +560,12 @@ fn trial_config(
             .slide
             .then(|| task.geometry().map(|g| g.clearance()))
             .transpose()?,
+        symmetry: task.omega.symmetry,
+        twist: if options.twist {
+            twist_setup(task, map.as_deref())?
+        } else {
+            None
+        },
         noise: if options.sensor_noise {
             Noise::TYPICAL
         } else {
@@ -469,6 +584,13 @@ fn trial_config(
             mismatch_angle: options.mismatch_angle,
             sigma_vision: options.sigma_vision,
             vision_method: Some(options.vision_method.parameter()),
+            trace: match (options.strategy, &options.offsets) {
+                (Strategy::Pf, Offsets::Random { .. }) => Some(
+                    std::path::absolute(options.out.join("trace.csv"))
+                        .map_err(|e| HarnessError::io(&options.out, e))?,
+                ),
+                _ => None,
+            },
             ..Settings::default()
         },
     })
@@ -510,7 +632,10 @@ fn particles_for(dofs: usize) -> Option<i32> {
 /// (z presses), part B moves in x and y, and the hand holds part A off-centre in x and y.
 fn check_dofs(task: &Task, vision: bool) -> Result<()> {
     let dofs = task.dofs()?;
-    let supported = |d: &ftmap::Dof| matches!(d.axis, Axis::X | Axis::Y);
+    // Object rotations turn part B and the robot's wrist; grip rotations are not modelled.
+    let supported = |d: &ftmap::Dof| {
+        matches!(d.axis, Axis::X | Axis::Y) || (d.pose == Pose::Object && d.axis.is_rotation())
+    };
     let has = |pose, axis| dofs.iter().any(|d| d.pose == pose && d.axis == axis);
     let unsupported: Vec<String> = dofs
         .iter()
@@ -519,7 +644,7 @@ fn check_dofs(task: &Task, vision: bool) -> Result<()> {
         .collect();
     let reason = if !unsupported.is_empty() {
         format!(
-            "the work cell sets object and grip offsets in x and y only; task {} also has {}",
+            "the work cell sets object and grip offsets in x and y and object rotations only; task {} also has {}",
             task.name,
             unsupported.join(", ")
         )
@@ -528,9 +653,14 @@ fn check_dofs(task: &Task, vision: bool) -> Result<()> {
             "task {} must have object.x and object.y uncertain",
             task.name
         )
-    } else if vision && dofs.iter().any(|d| d.pose == Pose::Grip) {
+    } else if vision && dofs.iter().any(|d| d.pose == Pose::Grip || d.is_rotation()) {
         format!(
-            "the camera's model places part A on the TCP: task {} has an uncertain grip",
+            "the camera's model places part A on the TCP, unturned: task {} has an uncertain grip or rotation",
+            task.name
+        )
+    } else if has(Pose::Grip, Axis::X) && dofs.iter().any(|d| d.is_rotation()) {
+        format!(
+            "the work cell does not turn a part held off-centre: task {} has an uncertain grip and rotation",
             task.name
         )
     } else {
@@ -544,6 +674,28 @@ fn check_dofs(task: &Task, vision: bool) -> Result<()> {
 
 /// Mixed into a campaign's seed for its grip offsets.
 const GRIP_STREAM: u64 = 0x6772_6970;
+/// Mixed into a campaign's seed for its object rotations.
+const ROTATION_STREAM: u64 = 0x726f_7461;
+
+/// `n` rotation vectors (rad) from `seed`: on each of the grid's object rotation axes
+/// uniform over the axis's span (one whole period where it wraps), zero on the others.
+pub fn random_rotations(n: usize, axes: &[GridAxis], seed: u64) -> Vec<[f64; 3]> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let spans: Vec<(usize, f64, f64)> = axes
+        .iter()
+        .filter(|a| a.dof.pose == Pose::Object && a.dof.is_rotation())
+        .map(|a| (a.dof.axis.index() - 3, a.min, a.max()))
+        .collect();
+    (0..n)
+        .map(|_| {
+            let mut r = [0.0; 3];
+            for &(k, lo, hi) in &spans {
+                r[k] = rng.random_range(lo..=hi);
+            }
+            r
+        })
+        .collect()
+}
 
 /// True offsets uniform in the square ±`size` (m), from `seed`.
 pub fn random_offsets(n: usize, size: f64, seed: u64) -> Vec<[f64; 2]> {
@@ -596,8 +748,17 @@ pub fn run_campaign(
     bar.set_prefix(format!("{:?}", cfg.strategy).to_lowercase());
     let mut results = Vec::with_capacity(truths.len());
     let mut ok = 0;
+    // The first trial with the trace, if any; the others without.
+    let untraced = TrialConfig {
+        settings: Settings {
+            trace: None,
+            ..cfg.settings.clone()
+        },
+        ..cfg.clone()
+    };
     for (i, truth) in truths.iter().enumerate() {
-        let r = run_trial(sim, fmu, eye.as_deref_mut(), cfg, *truth, seed + i as u64)?;
+        let c = if i == 0 { cfg } else { &untraced };
+        let r = run_trial(sim, fmu, eye.as_deref_mut(), c, *truth, seed + i as u64)?;
         ok += usize::from(r.success);
         results.push(r);
         bar.set_message(format!("{ok} ok"));

@@ -50,6 +50,9 @@ pub struct Settings {
     pub sigma_vision: Option<f64>,
     /// `vision_method` (0 relative, 1 recalibration).
     pub vision_method: Option<i32>,
+    /// `trace`: an absolute path of a file the particles are appended to at every
+    /// measurement ([`crate::campaign::run_campaign`] traces a campaign's first trial only).
+    pub trace: Option<PathBuf>,
 }
 
 /// The FMU's estimate after a measurement.
@@ -65,6 +68,10 @@ pub struct Estimate {
     pub grip: [f64; 2],
     /// `grip.x_std`, `grip.y_std` (m).
     pub grip_std: [f64; 2],
+    /// `object.rx`, `object.ry`, `object.rz` (rad; 0 where the map's rotations are certain).
+    pub rot: [f64; 3],
+    /// `object.rx_std`, `object.ry_std`, `object.rz_std` (rad).
+    pub rot_std: [f64; 3],
     /// `confidence` (0..1).
     pub confidence: f64,
     /// `converged`.
@@ -84,11 +91,13 @@ struct Refs {
     tcp: [u32; 6],
     contact: u32,
     slide: u32,
-    slide_start: [u32; 2],
+    slide_start: [u32; 3],
     object: [u32; 2],
     std: [u32; 2],
     /// grip.x, grip.y, grip.x_std, grip.y_std.
     grip: [u32; 4],
+    /// object.rx, ry, rz, then their std.
+    rot: [u32; 6],
     /// confidence, ess, object.xy_corr.
     reals: [u32; 3],
     ints: [u32; 2],
@@ -105,6 +114,7 @@ struct Refs {
     vision: u32,
     sigma_vision: u32,
     vision_method: u32,
+    trace: u32,
     /// vision.left_distance, right_distance, passive_left, passive_right.
     features: [u32; 4],
     vision_valid: u32,
@@ -177,6 +187,14 @@ impl Fmu {
                 vr(md::GRIP_STD[0])?,
                 vr(md::GRIP_STD[1])?,
             ],
+            rot: [
+                vr(md::OBJECT[3])?,
+                vr(md::OBJECT[4])?,
+                vr(md::OBJECT[5])?,
+                vr(md::OBJECT_STD[3])?,
+                vr(md::OBJECT_STD[4])?,
+                vr(md::OBJECT_STD[5])?,
+            ],
             reals: [vr("confidence")?, vr("ess")?, vr(md::OBJECT_XY_CORR)?],
             ints: [vr("measurements")?, vr("clusters")?],
             converged: vr("converged")?,
@@ -192,6 +210,7 @@ impl Fmu {
             vision: vr("vision")?,
             sigma_vision: vr("sigma_vision")?,
             vision_method: vr("vision_method")?,
+            trace: vr("trace")?,
             features: group(md::VISION_FEATURES, vr)?,
             vision_valid: vr(md::VISION_VALID)?,
         };
@@ -224,6 +243,7 @@ impl Fmu {
         for (vr, file, name) in [
             (r.map, &settings.map, "map"),
             (r.vision, &settings.vision, "vision"),
+            (r.trace, &settings.trace, "trace"),
         ] {
             if let Some(file) = file {
                 let text = file.to_string_lossy().into_owned();
@@ -293,9 +313,9 @@ impl Estimator {
     }
 
     /// Hands one settled contact to the FMU (wrench in the map's convention, TCP position
-    /// relative to the nominal goal; `slide_start`, where a slide under force that ended in
-    /// it started), with an image's features when there are any, and returns its new
-    /// estimate.
+    /// and rotation vector relative to the nominal goal; `slide_start`, where a slide or a
+    /// twist under force that ended in it started: x, y, rz), with an image's features
+    /// when there are any, and returns its new estimate.
     ///
     /// # Errors
     /// When the FMU refuses an input or the step.
@@ -303,7 +323,8 @@ impl Estimator {
         &mut self,
         wrench: [f64; 6],
         tcp: [f64; 3],
-        slide_start: Option<[f64; 2]>,
+        rot: [f64; 3],
+        slide_start: Option<[f64; 3]>,
         image: Option<&Features>,
     ) -> Result<Estimate> {
         let r = &self.refs;
@@ -311,30 +332,35 @@ impl Estimator {
             .set_real(&r.wrench, &wrench)
             .map_err(fmi_err("set wrench"))?;
         self.inst
-            .set_real(&r.slide_start, &slide_start.unwrap_or([0.0; 2]))
+            .set_real(&r.slide_start, &slide_start.unwrap_or([0.0; 3]))
             .map_err(fmi_err("set slide_start"))?;
         self.inst
             .set_boolean(&[r.slide], &[i32::from(slide_start.is_some())])
             .map_err(fmi_err("set slide"))?;
-        self.pulse(r.contact, tcp, image)
+        self.pulse(
+            r.contact,
+            [tcp[0], tcp[1], tcp[2], rot[0], rot[1], rot[2]],
+            image,
+        )
     }
 
-    /// Hands an image's features alone (no contact; the task frame at `tcp`) to the FMU and
-    /// returns its new estimate.
+    /// Hands an image's features alone (no contact; the task frame at `tcp`, unturned) to
+    /// the FMU and returns its new estimate.
     ///
     /// # Errors
     /// When the FMU refuses an input or the step.
     pub fn look(&mut self, tcp: [f64; 3], image: &Features) -> Result<Estimate> {
         let valid = self.refs.vision_valid;
-        self.pulse(valid, tcp, Some(image))
+        self.pulse(valid, [tcp[0], tcp[1], tcp[2], 0.0, 0.0, 0.0], Some(image))
     }
 
-    /// Sets the TCP and the image inputs, raises the Boolean `trigger` for one step (the FMU
-    /// measures on its rising edge), reads the estimate and lowers everything again.
-    fn pulse(&mut self, trigger: u32, tcp: [f64; 3], image: Option<&Features>) -> Result<Estimate> {
+    /// Sets the TCP pose (x, y, z, rotation vector) and the image inputs, raises the
+    /// Boolean `trigger` for one step (the FMU measures on its rising edge), reads the
+    /// estimate and lowers everything again.
+    fn pulse(&mut self, trigger: u32, tcp: [f64; 6], image: Option<&Features>) -> Result<Estimate> {
         let r = self.refs.clone();
         self.inst
-            .set_real(&r.tcp, &[tcp[0], tcp[1], tcp[2], 0.0, 0.0, 0.0])
+            .set_real(&r.tcp, &tcp)
             .map_err(fmi_err("set tcp"))?;
         if let Some(f) = image {
             let v = [f.distances[0], f.distances[1], f.passive[0], f.passive[1]];
@@ -363,8 +389,15 @@ impl Estimator {
     /// When the FMU refuses a get call.
     pub fn estimate(&mut self) -> Result<Estimate> {
         let r = &self.refs;
-        let (mut object, mut std, mut grip, mut reals, mut ints, mut conv) =
-            ([0.0; 2], [0.0; 2], [0.0; 4], [0.0; 3], [0; 2], [0]);
+        let (mut object, mut std, mut grip, mut rot, mut reals, mut ints, mut conv) = (
+            [0.0; 2],
+            [0.0; 2],
+            [0.0; 4],
+            [0.0; 6],
+            [0.0; 3],
+            [0; 2],
+            [0],
+        );
         self.inst
             .get_real(&r.object, &mut object)
             .map_err(fmi_err("get object"))?;
@@ -374,6 +407,9 @@ impl Estimator {
         self.inst
             .get_real(&r.grip, &mut grip)
             .map_err(fmi_err("get grip and its std"))?;
+        self.inst
+            .get_real(&r.rot, &mut rot)
+            .map_err(fmi_err("get object rotations and their std"))?;
         self.inst
             .get_real(&r.reals, &mut reals)
             .map_err(fmi_err("get confidence, ess, object.xy_corr"))?;
@@ -389,6 +425,8 @@ impl Estimator {
             corr: reals[2],
             grip: [grip[0], grip[1]],
             grip_std: [grip[2], grip[3]],
+            rot: [rot[0], rot[1], rot[2]],
+            rot_std: [rot[3], rot[4], rot[5]],
             confidence: reals[0],
             converged: conv[0] != 0,
             ess: reals[1],

@@ -11,6 +11,7 @@
 //! - [`fmu_driver`], `FtFusion.fmu` through FMI calls, and [`fmu_log`], what it logged;
 //!   [`trial`], one trial (Algorithm 1 or the spiral search); [`campaign`], campaigns set
 //!   up and run; [`report`], `trials.csv`, `measurements.csv` and `summary.json`;
+//!   [`table`], many campaigns in one table;
 //!   [`calibration`], whether the reported spread tells the truth; [`plot`], the plots;
 //! - [`boundary`], where the scene accepts part A against the geometry; [`scan`], measured maps; [`compare`], two maps' agreement and two campaigns side by
 //!   side; [`render`], one camera image with its edges, and the detectors' timing.
@@ -32,6 +33,7 @@ pub mod scan;
 pub mod scene;
 pub mod sensor;
 pub mod sim;
+pub mod table;
 pub mod trial;
 pub mod vision;
 pub mod world;

@@ -1,7 +1,8 @@
 //! Plots a person looks at (PNG): the estimate after the first measurements of a trial (the
-//! paper's Fig. 8, and Fig. 12 with a camera; the FMU exposes no particles, so each panel
-//! shows the estimate and its 1- and 2-sigma ellipses), contacts per trial of two campaigns, contacts per true offset of a sweep (Fig. 10), and the
-//! agreement of two maps.
+//! paper's Fig. 8, and Fig. 12 with a camera: the estimate and its 1- and 2-sigma
+//! ellipses), the particles themselves from the FMU's trace (Fig. 8 and 9, a panel per
+//! pair of DOFs), contacts per trial of two campaigns, contacts per true offset of a sweep
+//! (Fig. 10), and the agreement of two maps.
 
 use std::path::Path;
 
@@ -11,6 +12,7 @@ use crate::error::{HarnessError, Result, create_parent};
 use crate::fmu_driver::Estimate;
 use crate::report::TrialRow;
 use crate::trial::TrialResult;
+use model_description::trace::TraceMeasurement;
 
 type Draw = std::result::Result<(), Box<dyn std::error::Error + Send + Sync>>;
 
@@ -155,6 +157,105 @@ fn draw_estimates(path: &Path, trial: &TrialResult, size: f64) -> Draw {
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
                 .draw()?;
+        }
+    }
+    root.present()?;
+    Ok(())
+}
+
+/// The particles after each of `measurements` (the FMU's trace of one trial, its first
+/// three used), a row per measurement and a panel per pair of DOFs (the paper's Fig. 8 and
+/// 9), the particles' colour darker with their weight, the estimate and `truth` (one value
+/// per DOF, m or rad) marked; translations in mm, rotations in degrees.
+///
+/// # Errors
+/// When the image cannot be written or there is nothing to draw.
+pub fn particles(path: &Path, measurements: &[TraceMeasurement], truth: &[f64]) -> Result<()> {
+    create_parent(path)?;
+    wrap(path, draw_particles(path, measurements, truth))
+}
+
+/// A DOF's value as plotted: mm or degrees.
+fn shown(dof: &str, v: f64) -> f64 {
+    if dof.contains(".r") {
+        v.to_degrees()
+    } else {
+        v * 1e3
+    }
+}
+
+fn draw_particles(path: &Path, measurements: &[TraceMeasurement], truth: &[f64]) -> Draw {
+    let rows = &measurements[..measurements.len().min(3)];
+    let Some(first) = rows.first() else {
+        return Err("the trace holds no measurement".into());
+    };
+    let d = first.dofs.len();
+    let pairs: Vec<(usize, usize)> = if d == 1 {
+        vec![(0, 0)]
+    } else {
+        (0..d)
+            .flat_map(|a| (a + 1..d).map(move |b| (a, b)))
+            .collect()
+    };
+    let root = BitMapBackend::new(path, (480 * pairs.len() as u32, 440 * rows.len() as u32))
+        .into_drawing_area();
+    root.fill(&WHITE)?;
+    let areas = root.split_evenly((rows.len(), pairs.len()));
+    for (r, m) in rows.iter().enumerate() {
+        let top = m
+            .weights
+            .iter()
+            .copied()
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        for (c, &(a, b)) in pairs.iter().enumerate() {
+            let (na, nb) = (&m.dofs[a], &m.dofs[b]);
+            let range = |k: usize, name: &str| {
+                let (lo, hi) = m
+                    .poses
+                    .iter()
+                    .map(|p| shown(name, p[k]))
+                    .chain([shown(name, truth.get(k).copied().unwrap_or(0.0))])
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                        (l.min(v), h.max(v))
+                    });
+                let pad = 0.05 * (hi - lo).max(1e-3);
+                (lo - pad)..(hi + pad)
+            };
+            let mut chart = ChartBuilder::on(&areas[r * pairs.len() + c])
+                .caption(
+                    format!("after measurement {}: {na}, {nb}", m.measurement),
+                    ("sans-serif", 18),
+                )
+                .margin(10)
+                .x_label_area_size(40)
+                .y_label_area_size(55)
+                .build_cartesian_2d(range(a, na), range(b, nb))?;
+            let unit = |n: &str| if n.contains(".r") { "deg" } else { "mm" };
+            chart
+                .configure_mesh()
+                .x_desc(format!("{na} [{}]", unit(na)))
+                .y_desc(format!("{nb} [{}]", unit(nb)))
+                .draw()?;
+            chart.draw_series(m.poses.iter().zip(&m.weights).map(|(p, w)| {
+                let shade = 0.15 + 0.85 * (w / top);
+                Circle::new(
+                    (shown(na, p[a]), shown(nb, p[b])),
+                    2,
+                    BLUE.mix(shade).filled(),
+                )
+            }))?;
+            let at = |v: &[f64]| (shown(na, v[a]), shown(nb, v[b]));
+            chart.draw_series(std::iter::once(Circle::new(
+                at(&m.estimate),
+                6,
+                BLACK.stroke_width(2),
+            )))?;
+            chart.draw_series(std::iter::once(Cross::new(
+                at(truth),
+                9,
+                RED.stroke_width(3),
+            )))?;
         }
     }
     root.present()?;

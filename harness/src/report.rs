@@ -3,15 +3,16 @@
 
 use std::path::Path;
 
-use serde::Serialize;
+use ftmap::{Axis, Pose, Task};
+use serde::{Deserialize, Serialize};
 
 use crate::calibration::{self, Calibration, Sample};
 use crate::error::{HarnessError, Result};
-use crate::trial::{Strategy, TrialResult};
+use crate::trial::{Step, Strategy, TrialResult};
 use crate::world::WorldKind;
 
 /// Statistics of a count per trial.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct ContactStats {
     /// Mean.
     pub mean: f64,
@@ -28,6 +29,8 @@ pub struct ContactStats {
 pub struct Summary {
     /// Task name.
     pub task: String,
+    /// The task's uncertain DOFs (`object.x`, ...).
+    pub dofs: Vec<String>,
     /// Where the contact motions happened.
     pub world: WorldKind,
     /// Strategy.
@@ -53,6 +56,8 @@ pub struct Summary {
     pub final_error_mean: f64,
     /// Largest such distance (m).
     pub final_error_max: f64,
+    /// The last approach's error per uncertain object DOF.
+    pub final_errors: Vec<DofError>,
     /// Trials per wall-clock second.
     pub trials_per_second: f64,
     /// Simulated time over wall-clock time spent in MuJoCo.
@@ -65,8 +70,14 @@ pub struct Summary {
     pub slides: usize,
     /// Trials whose part went in on a slide.
     pub inserted_by_slide: usize,
+    /// Twists under force made, of all contact motions.
+    pub twists: usize,
+    /// Trials whose part went in on a twist.
+    pub inserted_by_twist: usize,
     /// The grip estimate, where the campaign's grip offsets were uncertain.
     pub grip: Option<GripSummary>,
+    /// The rotation estimate, where part B's rotations were uncertain.
+    pub rotation: Option<RotationSummary>,
 }
 
 /// How well a campaign found the grip offsets.
@@ -108,6 +119,102 @@ impl GripSummary {
     }
 }
 
+/// How well a campaign's reported rotation spreads held the truth, per rotation axis
+/// part B was turned about.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct RotationSummary {
+    /// `object.rx` .. `object.rz`, those turned.
+    pub dofs: Vec<String>,
+    /// Share of contact measurements whose true rotation lies within 2 reported sigma,
+    /// per DOF.
+    pub within_2sigma: Vec<f64>,
+}
+
+impl RotationSummary {
+    /// The summary of `results` and their `samples`; `None` where no part B was turned.
+    fn of(results: &[TrialResult], samples: &[Sample]) -> Option<Self> {
+        let turned: Vec<usize> = (0..3)
+            .filter(|&k| results.iter().any(|r| r.rot[k] != 0.0))
+            .collect();
+        if turned.is_empty() {
+            return None;
+        }
+        let m = samples.len().max(1) as f64;
+        Some(Self {
+            dofs: turned
+                .iter()
+                .map(|&k| format!("object.{}", ["rx", "ry", "rz"][k]))
+                .collect(),
+            within_2sigma: turned
+                .iter()
+                .map(|&k| samples.iter().filter(|s| s.rot_z()[k].abs() <= 2.0).count() as f64 / m)
+                .collect(),
+        })
+    }
+}
+
+/// The last approach's error on one uncertain DOF of the object, over a campaign's trials.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct DofError {
+    /// The DOF (`object.x`, `object.rz`, ...).
+    pub dof: String,
+    /// Mean |error| (m or rad).
+    pub mean: f64,
+    /// Largest |error| (m or rad).
+    pub max: f64,
+}
+
+/// The last approach's error per uncertain object DOF of `task` over `results`: the TCP
+/// against the true offset on x, y; [`TrialResult::final_rot_error`] on rotations.
+fn final_errors(task: &Task, results: &[TrialResult]) -> Vec<DofError> {
+    let dofs = task.dofs().unwrap_or_default();
+    dofs.iter()
+        .filter(|d| d.pose == Pose::Object && d.axis != Axis::Z)
+        .map(|d| {
+            let k = d.axis.index();
+            let errors: Vec<f64> = results
+                .iter()
+                .map(|r| {
+                    if k < 2 {
+                        r.steps
+                            .last()
+                            .map_or(r.offset[k], |s| s.tcp[k] - r.offset[k])
+                            .abs()
+                    } else {
+                        r.final_rot_error[k - 3].abs()
+                    }
+                })
+                .collect();
+            DofError {
+                dof: d.to_string(),
+                mean: errors.iter().sum::<f64>() / errors.len().max(1) as f64,
+                max: errors.iter().copied().fold(0.0, f64::max),
+            }
+        })
+        .collect()
+}
+
+impl DofError {
+    /// `object.x 0.012 / 0.030 mm` (degrees on a rotation).
+    pub fn text(&self) -> String {
+        if self.dof.contains(".r") {
+            format!(
+                "{} {:.3} / {:.3} deg",
+                self.dof,
+                self.mean.to_degrees(),
+                self.max.to_degrees()
+            )
+        } else {
+            format!(
+                "{} {:.4} / {:.4} mm",
+                self.dof,
+                self.mean * 1e3,
+                self.max * 1e3
+            )
+        }
+    }
+}
+
 impl ContactStats {
     /// Mean, median, p95 and maximum of `values`.
     pub fn of(mut values: Vec<f64>) -> Self {
@@ -129,9 +236,25 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted[rank - 1]
 }
 
+/// The contact motions of `results` that `kind` picks (slides, twists).
+fn made(results: &[TrialResult], kind: impl Fn(&Step) -> bool) -> usize {
+    results
+        .iter()
+        .map(|r| r.steps.iter().filter(|s| kind(s)).count())
+        .sum()
+}
+
+/// The trials of `results` whose part went in on a motion that `kind` picks.
+fn inserted_by(results: &[TrialResult], kind: impl Fn(&Step) -> bool) -> usize {
+    results
+        .iter()
+        .filter(|r| r.success && r.steps.last().is_some_and(&kind))
+        .count()
+}
+
 /// Summarises trial results.
 pub fn summarize(
-    task: &str,
+    task: &Task,
     world: &WorldKind,
     strategy: Strategy,
     sensor_noise: bool,
@@ -146,7 +269,13 @@ pub fn summarize(
     let trial_wall: f64 = results.iter().map(|r| r.wall).sum();
     let samples = calibration::samples(results);
     Summary {
-        task: task.to_owned(),
+        task: task.name.clone(),
+        dofs: task
+            .dofs()
+            .unwrap_or_default()
+            .iter()
+            .map(ToString::to_string)
+            .collect(),
         world: world.clone(),
         strategy,
         trials: results.len(),
@@ -161,23 +290,29 @@ pub fn summarize(
         images_missed: results.iter().map(|r| r.images_missed).sum(),
         final_error_mean: results.iter().map(|r| r.final_error).sum::<f64>() / n,
         final_error_max: results.iter().map(|r| r.final_error).fold(0.0, f64::max),
+        final_errors: final_errors(task, results),
         trials_per_second: results.len() as f64 / wall.max(1e-9),
         realtime_factor: sim / sim_wall.max(1e-9),
         realtime_factor_overall: sim / trial_wall.max(1e-9),
         sensor_noise,
-        slides: results
-            .iter()
-            .map(|r| r.steps.iter().filter(|s| s.slide).count())
-            .sum(),
-        inserted_by_slide: results
-            .iter()
-            .filter(|r| r.success && r.steps.last().is_some_and(|s| s.slide))
-            .count(),
+        slides: made(results, |s| s.slide),
+        inserted_by_slide: inserted_by(results, |s| s.slide),
+        twists: made(results, |s| s.twist),
+        inserted_by_twist: inserted_by(results, |s| s.twist),
         grip: GripSummary::of(results, &samples),
+        rotation: RotationSummary::of(results, &samples),
     }
 }
 
 impl Summary {
+    /// "`made` of N contact motions, `inserted` of them inserted the part".
+    fn motions(&self, made: usize, inserted: usize) -> String {
+        format!(
+            "{made} of {} contact motions, {inserted} of them inserted the part",
+            (self.contacts.mean * self.trials as f64).round() as usize
+        )
+    }
+
     /// A readable table of the summary.
     pub fn table(&self) -> String {
         let mm = |m: f64| format!("{:.3} mm", m * 1e3);
@@ -198,12 +333,11 @@ impl Summary {
             ),
             (
                 "slides under force",
-                format!(
-                    "{} of {} contact motions, {} of them inserted the part",
-                    self.slides,
-                    (self.contacts.mean * self.trials as f64).round() as usize,
-                    self.inserted_by_slide
-                ),
+                self.motions(self.slides, self.inserted_by_slide),
+            ),
+            (
+                "twists under force",
+                self.motions(self.twists, self.inserted_by_twist),
             ),
             (
                 "camera",
@@ -268,6 +402,27 @@ impl Summary {
                     }),
             ),
             (
+                "final |error| per DOF, mean / max",
+                self.final_errors
+                    .iter()
+                    .map(DofError::text)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            ),
+            (
+                "rotation: true within 2 sigma",
+                self.rotation
+                    .as_ref()
+                    .map_or("n/a (rotations certain)".to_owned(), |r| {
+                        r.dofs
+                            .iter()
+                            .zip(&r.within_2sigma)
+                            .map(|(d, x)| format!("{d} {:.1} %", 100.0 * x))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    }),
+            ),
+            (
                 "trials per second",
                 format!("{:.2}", self.trials_per_second),
             ),
@@ -313,6 +468,12 @@ pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
         "sim_time_s",
         "grip_x_m",
         "grip_y_m",
+        "rot_x_rad",
+        "rot_y_rad",
+        "rot_z_rad",
+        "final_rot_error_x_rad",
+        "final_rot_error_y_rad",
+        "final_rot_error_z_rad",
     ])
     .map_err(io)?;
     for (i, r) in results.iter().enumerate() {
@@ -332,6 +493,12 @@ pub fn write_trials_csv(path: &Path, results: &[TrialResult]) -> Result<()> {
             format!("{:.4}", r.sim_time),
             r.grip[0].to_string(),
             r.grip[1].to_string(),
+            r.rot[0].to_string(),
+            r.rot[1].to_string(),
+            r.rot[2].to_string(),
+            format!("{:.9}", r.final_rot_error[0]),
+            format!("{:.9}", r.final_rot_error[1]),
+            format!("{:.9}", r.final_rot_error[2]),
         ])
         .map_err(io)?;
     }
@@ -370,6 +537,15 @@ pub fn write_measurements_csv(path: &Path, samples: &[Sample]) -> Result<()> {
         "grip_y_m",
         "grip_x_std_m",
         "grip_y_std_m",
+        "true_rot_x_rad",
+        "true_rot_y_rad",
+        "true_rot_z_rad",
+        "object_rx_rad",
+        "object_ry_rad",
+        "object_rz_rad",
+        "object_rx_std_rad",
+        "object_ry_std_rad",
+        "object_rz_std_rad",
     ])
     .map_err(io)?;
     for s in samples {
@@ -397,6 +573,15 @@ pub fn write_measurements_csv(path: &Path, samples: &[Sample]) -> Result<()> {
             m(e.grip[1]),
             sd(e.grip_std[0]),
             sd(e.grip_std[1]),
+            s.rot_truth[0].to_string(),
+            s.rot_truth[1].to_string(),
+            s.rot_truth[2].to_string(),
+            m(e.rot[0]),
+            m(e.rot[1]),
+            m(e.rot[2]),
+            sd(e.rot_std[0]),
+            sd(e.rot_std[1]),
+            sd(e.rot_std[2]),
         ])
         .map_err(io)?;
     }

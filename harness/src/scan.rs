@@ -142,5 +142,6 @@ fn meta(task: &Task) -> Result<MapMeta> {
             mujoco_rs::mujoco_version()
         ),
         clearance: Some(task.geometry()?.clearance()),
+        symmetry: task.omega.symmetry,
     })
 }

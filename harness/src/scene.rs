@@ -33,9 +33,9 @@ use std::f64::consts::{PI, TAU};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use ftmap::Task;
 use ftmap::task::cad::{self, Geometry, Role};
 use ftmap::vision::Camera;
+use ftmap::{Pose, Task};
 
 use crate::error::{HarnessError, Result};
 
@@ -80,6 +80,19 @@ pub const LOOK_CLEARANCE: f64 = 0.001;
 pub const CARRIAGE_MASS: f64 = 5.0;
 /// Stiffness of the position servos across the approach (N/m).
 pub const SERVO_KP: f64 = 1.0e6;
+/// The wrist's hinge joints in the order the scene nests them (R = Rz Ry Rx, the Euler
+/// angles of nalgebra's `euler_angles`): joint, its servo, the axis it turns about.
+pub const WRIST_JOINTS: [(&str, &str, usize); 3] = [
+    ("rz", "servo_rz", 2),
+    ("ry", "servo_ry", 1),
+    ("rx", "servo_rx", 0),
+];
+/// Stiffness of the wrist's position servos (N.m/rad): a rim's 0.25 N.m turns part A by
+/// 25 microradians.
+pub const SERVO_KP_ROT: f64 = 1.0e4;
+/// Rotational inertia of the wrist about each axis (kg m^2): the servo's period is then
+/// 14 ms, 70 time steps.
+pub const WRIST_INERTIA: f64 = 0.05;
 /// Gain of the feed along the approach (N s/m): with the feed at rest, a damping that sets
 /// the approach speed, force / gain (5 mm/s at 50 N: 1 µm per step).
 pub const APPROACH_DAMPING: f64 = 10000.0;
@@ -401,6 +414,9 @@ pub struct SceneSpec {
     pub friction: f64,
     /// The vision camera, where the task has one (bearing housing: experiment D).
     pub camera: Option<CameraSpec>,
+    /// Whether the wrist has a hinge about x, y, z: the task's uncertain object rotations
+    /// (the TCP turns to their estimates).
+    pub wrist: [bool; 3],
 }
 
 /// A regular polygon with `n` vertices on radius `r`, the first at angle `phase`.
@@ -644,6 +660,12 @@ impl SceneSpec {
             force: task.contact.force,
             friction: task.contact.friction,
             camera,
+            wrist: std::array::from_fn(|k| {
+                task.dofs().is_ok_and(|dofs| {
+                    dofs.iter()
+                        .any(|d| d.pose == Pose::Object && d.axis == ftmap::Axis::ALL[3 + k])
+                })
+            }),
         })
     }
 
@@ -787,6 +809,30 @@ impl SceneSpec {
             "      <inertial pos=\"0 0 0.1\" mass=\"{}\" diaginertia=\"0.05 0.05 0.05\"/>",
             f(CARRIAGE_MASS)
         );
+        // The wrist turns part A about the task frame's origin (hinges nested so that
+        // R = Rz Ry Rx), each held by a stiff position servo, critically damped; without
+        // hinges it is welded to the carriage, massless.
+        let _ = writeln!(x, "      <body name=\"wrist\" pos=\"0 0 0\">");
+        let damping_rot = 2.0 * (SERVO_KP_ROT * WRIST_INERTIA).sqrt();
+        for &(name, _, axis) in &WRIST_JOINTS {
+            if self.wrist[axis] {
+                let mut dir = [0.0; 3];
+                dir[axis] = 1.0;
+                let _ = writeln!(
+                    x,
+                    "        <joint name=\"{name}\" type=\"hinge\" axis=\"{}\" damping=\"{}\"/>",
+                    v3(dir),
+                    f(damping_rot)
+                );
+            }
+        }
+        if self.wrist.contains(&true) {
+            let _ = writeln!(
+                x,
+                "        <inertial pos=\"0 0 0\" mass=\"0.01\" diaginertia=\"{i} {i} {i}\"/>",
+                i = f(WRIST_INERTIA)
+            );
+        }
         let _ = writeln!(x, "      <body name=\"part_a\" pos=\"0 0 0\">");
         let _ = writeln!(
             x,
@@ -823,6 +869,7 @@ impl SceneSpec {
             v3(self.sensor_origin)
         );
         let _ = writeln!(x, "      </body>");
+        let _ = writeln!(x, "      </body>");
         let _ = writeln!(x, "    </body>");
         let _ = writeln!(x, "  </worldbody>");
         let _ = writeln!(x, "  <actuator>");
@@ -847,13 +894,28 @@ impl SceneSpec {
             "    <velocity name=\"feed\" joint=\"z\" kv=\"{}\"/>",
             f(APPROACH_DAMPING)
         );
+        // The wrist's servos after the first four, whose order scripts rely on.
+        for &(name, servo, axis) in &WRIST_JOINTS {
+            if self.wrist[axis] {
+                let _ = writeln!(
+                    x,
+                    "    <position name=\"{servo}\" joint=\"{name}\" kp=\"{}\"/>",
+                    f(SERVO_KP_ROT)
+                );
+            }
+        }
         let _ = writeln!(x, "  </actuator>");
         let _ = writeln!(x, "  <sensor>");
         let _ = writeln!(x, "    <force name=\"ft_force\" site=\"ft\"/>");
         let _ = writeln!(x, "    <torque name=\"ft_torque\" site=\"ft\"/>");
         let _ = writeln!(x, "  </sensor>");
         let _ = writeln!(x, "  <keyframe>");
-        let _ = writeln!(x, "    <key name=\"start\" qpos=\"0 0 {}\"/>", f(start));
+        let hinges = " 0".repeat(self.wrist.iter().filter(|&&h| h).count());
+        let _ = writeln!(
+            x,
+            "    <key name=\"start\" qpos=\"0 0 {}{hinges}\"/>",
+            f(start)
+        );
         let _ = writeln!(x, "  </keyframe>");
         let _ = writeln!(x, "</mujoco>");
         x

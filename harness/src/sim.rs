@@ -20,9 +20,10 @@ use std::path::{Path, PathBuf};
 
 use ftmap::Task;
 use mujoco_rs::prelude::*;
+use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 
 use crate::error::{HarnessError, Result};
-use crate::scene::{APPROACH_CLEARANCE, SceneSpec, scene_path, write_scene};
+use crate::scene::{APPROACH_CLEARANCE, SceneSpec, WRIST_JOINTS, scene_path, write_scene};
 use crate::world::{Contact, World};
 
 /// Longest contact motion (s of simulated time) before it is reported as not settled.
@@ -40,11 +41,22 @@ pub const INSERTION_SPEED: f64 = 0.1;
 pub const INSERTION_TIME: f64 = 0.01;
 /// Speed of a slide under force (m/s).
 pub const SLIDE_SPEED: f64 = 0.005;
+/// Turning speed of a twist under force (rad/s): a degree in 87 time steps.
+pub const TWIST_SPEED: f64 = 1.0;
 /// A slide stops where part A has dropped this far below part B's top (m).
 pub const DROP_DEPTH: f64 = 0.00001;
 /// A contact motion ending with the task frame below this height above the goal has
 /// inserted part A (m).
 pub const SUCCESS_HEIGHT: f64 = 0.001;
+
+/// One hinge joint of the wrist: the axis it turns about (0 x, 1 y, 2 z), its position
+/// and its servo.
+#[derive(Debug, Clone, Copy)]
+struct Hinge {
+    axis: usize,
+    qpos: usize,
+    actuator: usize,
+}
 
 /// A loaded scene with its data, ready for contact motions.
 pub struct Sim {
@@ -58,8 +70,14 @@ pub struct Sim {
     /// Body `part_a` and site `ft`: a grip offset moves the one in the carriage and the
     /// other back, so that the sensor stays where the hand holds it.
     grip_ids: [usize; 2],
+    /// The wrist's hinges the scene has (those of the task's rotational DOFs).
+    wrist: Vec<Hinge>,
     object: [f64; 2],
+    /// Part B's rotation (rotation vector, rad).
+    object_rot: [f64; 3],
     grip: [f64; 2],
+    /// The wrist's commanded angles about x, y, z (Euler, R = Rz Ry Rx).
+    wrist_angles: [f64; 3],
     simulated: f64,
 }
 
@@ -113,6 +131,18 @@ impl Sim {
             id(&model, MjtObjBase::mjOBJ_BODY, "body", "part_a")?,
             id(&model, MjtObjBase::mjOBJ_SITE, "site", "ft")?,
         ];
+        // The hinges the task needs (the others are absent from its scene).
+        let wrist = WRIST_JOINTS
+            .iter()
+            .filter_map(|&(name, servo, axis)| {
+                let j = model.name_to_id(MjtObjBase::mjOBJ_JOINT, name)?;
+                Some(act(servo).map(|actuator| Hinge {
+                    axis,
+                    qpos: adr[j] as usize,
+                    actuator,
+                }))
+            })
+            .collect::<Result<Vec<_>>>()?;
         let data = MjData::new(Box::new(model));
         Ok(Self {
             data,
@@ -123,8 +153,11 @@ impl Sim {
             sensors,
             mocap,
             grip_ids,
+            wrist,
             object: [0.0; 2],
+            object_rot: [0.0; 3],
             grip: [0.0; 2],
+            wrist_angles: [0.0; 3],
             simulated: 0.0,
         })
     }
@@ -153,14 +186,16 @@ impl Sim {
             .collect()
     }
 
-    /// A contact motion at `xy`, then a slide to `slide`, if any.
-    fn motion(&mut self, xy: [f64; 2], mut slide: Option<[f64; 2]>) -> Contact {
+    /// A contact motion at `xy`, then a slide or a twist, if any.
+    fn motion(&mut self, xy: [f64; 2], mut sweep: Option<Sweep>) -> Contact {
         let d = &mut self.data;
         d.reset();
         // The object offset is where the TCP aligns the parts: part B sits that far off, and
         // the grip's offset farther, under part A.
         let b = [self.object[0] + self.grip[0], self.object[1] + self.grip[1]];
         d.mocap_pos_mut()[self.mocap] = [b[0], b[1], 0.0];
+        let q = UnitQuaternion::from_scaled_axis(Vector3::from(self.object_rot));
+        d.mocap_quat_mut()[self.mocap] = [q.w, q.i, q.j, q.k];
         let start = [xy[0], xy[1], self.spec.top + APPROACH_CLEARANCE];
         for (k, &q) in self.qpos.iter().enumerate() {
             d.qpos_mut()[q] = start[k];
@@ -169,6 +204,10 @@ impl Sim {
         for (k, &a) in self.actuators.iter().enumerate() {
             d.ctrl_mut()[a] = ctrl[k];
         }
+        for h in &self.wrist {
+            d.qpos_mut()[h.qpos] = self.wrist_angles[h.axis];
+            d.ctrl_mut()[h.actuator] = self.wrist_angles[h.axis];
+        }
         let dt = d.model().opt().timestep;
         let (max_steps, settle_steps) = (
             (MAX_TIME / dt).round() as usize,
@@ -176,8 +215,11 @@ impl Sim {
         );
         let entered = self.spec.top - self.spec.chamfers - ENTRY_DEPTH;
         let dropped = self.spec.top - DROP_DEPTH;
-        // The slide: its end and length, and when it started (steps), once the press settled.
-        let mut sliding: Option<([f64; 2], f64, usize)> = None;
+        // The sweep: where it goes, its speed (m/s or rad/s) and length (m or rad), and when
+        // it started (steps), once the press settled.
+        let mut sliding: Option<(Sweep, f64, f64, usize)> = None;
+        let twist = self.wrist.iter().find(|h| h.axis == 2).copied();
+        let yaw = self.wrist_angles[2];
         let (mut calm, mut steps) = (0, 0);
         while steps < max_steps {
             d.step();
@@ -186,23 +228,43 @@ impl Sim {
             if z < entered {
                 d.ctrl_mut()[self.actuators[3]] = -INSERTION_SPEED.min(z.max(0.0) / INSERTION_TIME);
             }
-            if let Some((to, len, t0)) = sliding {
-                let done = ((steps - t0) as f64 * dt * SLIDE_SPEED / len).min(1.0);
+            if let Some((to, speed, len, t0)) = sliding {
+                let done = ((steps - t0) as f64 * dt * speed / len).min(1.0);
+                let at = |k: usize, d: &MjData<Box<MjModel>>| d.qpos()[k];
                 if z < dropped {
-                    // The edge dropped in: hold the carriage where part A is.
-                    let here = [d.qpos()[self.qpos[0]], d.qpos()[self.qpos[1]]];
-                    d.ctrl_mut()[self.actuators[0]] = here[0];
-                    d.ctrl_mut()[self.actuators[1]] = here[1];
-                    sliding = None;
-                } else if done < 1.0 {
-                    for k in 0..2 {
-                        d.ctrl_mut()[self.actuators[k]] = xy[k] + done * (to[k] - xy[k]);
+                    // The edge dropped in: hold the carriage (and wrist) where part A is.
+                    for (&q, &a) in self.qpos.iter().zip(&self.actuators).take(2) {
+                        d.ctrl_mut()[a] = at(q, d);
                     }
-                    calm = 0;
-                    continue;
+                    if let Some(h) = twist {
+                        d.ctrl_mut()[h.actuator] = at(h.qpos, d);
+                    }
+                    sliding = None;
                 } else {
-                    d.ctrl_mut()[self.actuators[0]] = to[0];
-                    d.ctrl_mut()[self.actuators[1]] = to[1];
+                    // Along the way, then exactly at its end.
+                    let way = |from: f64, end: f64| {
+                        if done < 1.0 {
+                            from + done * (end - from)
+                        } else {
+                            end
+                        }
+                    };
+                    match to {
+                        Sweep::Line(end) => {
+                            for k in 0..2 {
+                                d.ctrl_mut()[self.actuators[k]] = way(xy[k], end[k]);
+                            }
+                        }
+                        Sweep::Turn(end) => {
+                            if let Some(h) = twist {
+                                d.ctrl_mut()[h.actuator] = way(yaw, end);
+                            }
+                        }
+                    }
+                    if done < 1.0 {
+                        calm = 0;
+                        continue;
+                    }
                     sliding = None;
                 }
             }
@@ -212,10 +274,15 @@ impl Sim {
                 calm = 0;
             }
             if calm >= settle_steps {
-                match slide.take() {
+                match sweep.take() {
                     Some(to) if z > entered => {
-                        let len = (to[0] - xy[0]).hypot(to[1] - xy[1]).max(f64::MIN_POSITIVE);
-                        sliding = Some((to, len, steps));
+                        let (speed, len) = match to {
+                            Sweep::Line(end) => {
+                                (SLIDE_SPEED, (end[0] - xy[0]).hypot(end[1] - xy[1]))
+                            }
+                            Sweep::Turn(end) => (TWIST_SPEED, (end - yaw).abs()),
+                        };
+                        sliding = Some((to, speed, len.max(f64::MIN_POSITIVE), steps));
                         calm = 0;
                     }
                     _ => break,
@@ -227,15 +294,49 @@ impl Sim {
         let raw = [s[f], s[f + 1], s[f + 2], s[t], s[t + 1], s[t + 2]];
         let q = d.qpos();
         let tcp = [q[self.qpos[0]], q[self.qpos[1]], q[self.qpos[2]]];
+        let mut angles = [0.0; 3];
+        for h in &self.wrist {
+            angles[h.axis] = q[h.qpos];
+        }
+        let rot = Rotation3::from_euler_angles(angles[0], angles[1], angles[2])
+            .scaled_axis()
+            .into();
         let time = d.time();
         self.simulated += time;
         let settled = calm >= settle_steps;
         Contact {
             raw,
             tcp,
+            rot,
             settled,
             inserted: settled && tcp[2] < SUCCESS_HEIGHT,
             time,
+        }
+    }
+}
+
+/// What a contact motion does once the press has settled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Sweep {
+    /// Slides the carriage to this x, y (m).
+    Line([f64; 2]),
+    /// Turns the wrist about z to this yaw (rad).
+    Turn(f64),
+}
+
+impl Sim {
+    /// A sweep's end: itself where part A went in, else a fresh press where it stopped
+    /// (after sliding or turning, static friction holds part A against the stiff servos
+    /// with up to mu times the imposed force, which no map of static contacts explains;
+    /// lifted by the approach clearance and pressed again, it reads the static contact).
+    fn pressed_again(&mut self, swept: Contact) -> Contact {
+        if swept.inserted {
+            return swept;
+        }
+        let pressed = self.motion([swept.tcp[0], swept.tcp[1]], None);
+        Contact {
+            time: swept.time + pressed.time,
+            ..pressed
         }
     }
 }
@@ -261,6 +362,33 @@ impl World for Sim {
         self.grip = xy;
     }
 
+    fn set_object_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
+        self.object_rot = rot;
+        Ok(())
+    }
+
+    /// The wrist's hinges take the rotation's Euler angles (R = Rz Ry Rx); an angle
+    /// above 1e-12 rad about an axis the scene has no hinge for is refused.
+    fn set_tcp_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
+        let (rx, ry, rz) = Rotation3::from_scaled_axis(Vector3::from(rot)).euler_angles();
+        let angles = [rx, ry, rz];
+        if let Some(axis) =
+            (0..3).find(|&k| angles[k].abs() > 1e-12 && self.wrist.iter().all(|h| h.axis != k))
+        {
+            return Err(HarnessError::Invalid {
+                what: "TCP rotation",
+                reason: format!(
+                    "the scene of task {} has no wrist joint `{}` to turn {} rad about",
+                    self.spec.task,
+                    ["rx", "ry", "rz"][axis],
+                    angles[axis]
+                ),
+            });
+        }
+        self.wrist_angles = angles;
+        Ok(())
+    }
+
     fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {
         self.motion(xy, None)
     }
@@ -273,15 +401,20 @@ impl World for Sim {
     /// contacts explains; lifted by the approach clearance and pressed again, it reads the
     /// static contact there.
     fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact {
-        let slid = self.motion(from, Some(to));
-        if slid.inserted {
-            return slid;
-        }
-        let pressed = self.motion([slid.tcp[0], slid.tcp[1]], None);
-        Contact {
-            time: slid.time + pressed.time,
-            ..pressed
-        }
+        let slid = self.motion(from, Some(Sweep::Line(to)));
+        self.pressed_again(slid)
+    }
+
+    /// The twist turns at [`TWIST_SPEED`] and, like a slide, stops where part A drops by
+    /// [`DROP_DEPTH`]; one that found no hole ends with a fresh press where it stopped.
+    fn twist_motion(&mut self, xy: [f64; 2], from: f64, to: f64) -> Result<Contact> {
+        // Refused where the scene has no hinge about z.
+        self.set_tcp_rotation([0.0, 0.0, from])?;
+        self.set_tcp_rotation([0.0, 0.0, to])?;
+        self.set_tcp_rotation([0.0, 0.0, from])?;
+        let twisted = self.motion(xy, Some(Sweep::Turn(to)));
+        self.wrist_angles[2] = twisted.rot[2];
+        Ok(self.pressed_again(twisted))
     }
 
     fn simulated(&self) -> f64 {

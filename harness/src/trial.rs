@@ -50,6 +50,23 @@ pub struct TrialConfig {
     /// Slides under force with the fit's radial clearance (m): [`next_motion`]; `None`,
     /// contact motions only.
     pub slide: Option<f64>,
+    /// n-fold symmetry of the fit about the approach (z): a yaw error counts modulo
+    /// 2 pi / n.
+    pub symmetry: Option<u32>,
+    /// Twists under force about z where the yaw is uncertain: [`next_motion`]; `None`,
+    /// none.
+    pub twist: Option<Twist>,
+}
+
+/// What decides a twist under force: the fit's tolerances.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Twist {
+    /// The fit's radial clearance (m).
+    pub clearance: f64,
+    /// The fit's yaw play at zero offset (rad).
+    pub play: f64,
+    /// The yaw's period where the fit is symmetric about z (rad).
+    pub period: Option<f64>,
 }
 
 /// The next motion of Algorithm 1 (the paper moves to the estimate and presses).
@@ -59,6 +76,8 @@ pub enum Motion {
     Contact([f64; 2]),
     /// A slide under force between these points (m).
     Slide([f64; 2], [f64; 2]),
+    /// A twist under force at this point (m) from one yaw to another (rad).
+    Twist([f64; 2], f64, f64),
 }
 
 /// The slide covers the estimate's spread along its major axis this many times each way.
@@ -135,8 +154,28 @@ impl Spread {
 /// the posterior is then a segment that contact motions would halve one by one, and that
 /// a slide crosses in one motion, dropping in where it finds the hole. The slide starts at
 /// the end nearer the TCP.
-pub fn next_motion(tcp: [f64; 2], estimate: &Estimate, slide: Option<f64>) -> Motion {
+///
+/// With `twist`, where the spread across x, y lies within the capture and the yaw's spread
+/// beyond half the fit's play: a twist at the estimate through the whole period where the
+/// fit is symmetric about z (else across [`SLIDE_SIGMAS`] of the yaw's spread each way). A
+/// press where x, y are right but the yaw is not stays out, and near the centre the corners
+/// rest on the rim alike at every yaw: there the yaw is weakly observable, and its spread
+/// is too narrow (octagon_yaw, 100 trials: the true yaw within 2 sigma in 62 % of the
+/// measurements). A twist passes every yaw of its range and drops in at the right one.
+pub fn next_motion(
+    tcp: [f64; 2],
+    estimate: &Estimate,
+    slide: Option<f64>,
+    twist: Option<Twist>,
+) -> Motion {
     let e = estimate.object;
+    if let Some(t) = twist {
+        let (yaw, std) = (estimate.rot[2], estimate.rot_std[2]);
+        if Spread::of(estimate).major <= CAPTURE * t.clearance && std > 0.5 * t.play {
+            let half = t.period.map_or(SLIDE_SIGMAS * std, |p| 0.5 * p);
+            return Motion::Twist(e, yaw - half, yaw + half);
+        }
+    }
     let Some(clearance) = slide else {
         return Motion::Contact(e);
     };
@@ -162,16 +201,19 @@ pub struct Truth {
     pub object: [f64; 2],
     /// How far off-centre the hand holds part A (m; the paper's r1).
     pub grip: [f64; 2],
+    /// Part B's rotation relative to the nominal goal (rotation vector, rad): the TCP
+    /// rotation at which the parts align.
+    pub rot: [f64; 3],
 }
 
 impl Truth {
-    /// Each of `objects` with the grip held as nominal.
+    /// Each of `objects` with the grip held as nominal and part B unturned.
     pub fn objects(objects: &[[f64; 2]]) -> Vec<Self> {
         objects
             .iter()
             .map(|&object| Self {
                 object,
-                grip: [0.0; 2],
+                ..Self::default()
             })
             .collect()
     }
@@ -182,6 +224,8 @@ impl Truth {
 pub struct Step {
     /// Commanded and settled task frame position (m).
     pub tcp: [f64; 3],
+    /// The task frame's rotation (rotation vector, rad).
+    pub rot: [f64; 3],
     /// Wrench handed to the estimator (map convention, with noise).
     pub wrench: [f64; 6],
     /// The FMU's estimate after this contact (pf only).
@@ -190,6 +234,8 @@ pub struct Step {
     pub image: bool,
     /// The motion was a slide under force.
     pub slide: bool,
+    /// The motion was a twist under force.
+    pub twist: bool,
 }
 
 /// What a trial ended with.
@@ -199,12 +245,19 @@ pub struct TrialResult {
     pub offset: [f64; 2],
     /// True grip offset (m).
     pub grip: [f64; 2],
+    /// True rotation of part B (rotation vector, rad).
+    pub rot: [f64; 3],
+    /// The fit's n-fold symmetry about z, modulo whose period yaw errors count.
+    pub symmetry: Option<u32>,
     /// Contact motions made.
     pub contacts: usize,
     /// Whether the part reached the goal depth.
     pub success: bool,
     /// Distance of the last approach point from the true offset (m).
     pub final_error: f64,
+    /// The last approach's rotation error: the rotation vector of R_tcp^T R_object (rad),
+    /// its z component modulo the symmetry's period.
+    pub final_rot_error: [f64; 3],
     /// Wall-clock time of the trial (s).
     pub wall: f64,
     /// Simulated time of the trial (s).
@@ -240,6 +293,21 @@ pub fn spiral(step: f64, radius: f64) -> Vec<[f64; 2]> {
     pts
 }
 
+/// The rotation from a TCP turned by `tcp` to part B turned by `object` (rotation vectors,
+/// rad): the rotation vector of R_tcp^T R_object, its z component brought within half the
+/// period of an n-fold `symmetry` about z.
+pub fn rotation_error(tcp: [f64; 3], object: [f64; 3], symmetry: Option<u32>) -> [f64; 3] {
+    use nalgebra::{Rotation3, Vector3};
+    let r = Rotation3::from_scaled_axis(Vector3::from(tcp)).inverse()
+        * Rotation3::from_scaled_axis(Vector3::from(object));
+    let mut e: [f64; 3] = r.scaled_axis().into();
+    if let Some(n) = symmetry {
+        let period = std::f64::consts::TAU / f64::from(n);
+        e[2] -= period * (e[2] / period).round();
+    }
+    e
+}
+
 /// Runs one trial against the true offsets `truth` with seed `seed` (noise and FMU seed);
 /// `eye` adds the camera.
 ///
@@ -258,6 +326,8 @@ pub fn run_trial(
     let offset = truth.object;
     sim.set_grip(truth.grip);
     sim.set_object(offset);
+    sim.set_object_rotation(truth.rot)?;
+    sim.set_tcp_rotation([0.0; 3])?;
     let mut rng = StdRng::seed_from_u64(seed);
     let mut estimator = match (cfg.strategy, fmu) {
         (Strategy::Pf, Some(f)) => {
@@ -283,7 +353,7 @@ pub fn run_trial(
         match eye.look(offset, tcp, seed)? {
             Some(f) => {
                 let est = e.look(tcp, &f)?;
-                motion = next_motion([tcp[0], tcp[1]], &est, cfg.slide);
+                motion = next_motion([tcp[0], tcp[1]], &est, cfg.slide, cfg.twist);
                 first_look = Some(est);
             }
             None => images_missed += 1,
@@ -297,20 +367,26 @@ pub fn run_trial(
             }
         }
         let t0 = Instant::now();
-        let slide = matches!(motion, Motion::Slide(..));
+        let (slide, twist) = (
+            matches!(motion, Motion::Slide(..)),
+            matches!(motion, Motion::Twist(..)),
+        );
         let c = match motion {
             Motion::Contact(p) => sim.contact_motion(p),
             Motion::Slide(from, to) => sim.slide_motion(from, to),
+            Motion::Twist(p, from, to) => sim.twist_motion(p, from, to)?,
         };
         sim_wall += t0.elapsed().as_secs_f64();
         let wrench = cfg.noise.apply(map_wrench(c.raw), &mut rng);
         if c.inserted {
             steps.push(Step {
                 tcp: c.tcp,
+                rot: c.rot,
                 wrench,
                 estimate: None,
                 image: false,
                 slide,
+                twist,
             });
             success = true;
             break;
@@ -326,30 +402,38 @@ pub fn run_trial(
         let estimate = match estimator.as_mut() {
             Some(e) => {
                 let slide_start = match motion {
-                    Motion::Slide(from, _) => Some(from),
+                    Motion::Slide(from, _) => Some([from[0], from[1], c.rot[2]]),
+                    Motion::Twist(p, from, _) => Some([p[0], p[1], from]),
                     Motion::Contact(_) => None,
                 };
-                let est = e.measure(wrench, c.tcp, slide_start, image.as_ref())?;
-                motion = next_motion([c.tcp[0], c.tcp[1]], &est, cfg.slide);
+                let est = e.measure(wrench, c.tcp, c.rot, slide_start, image.as_ref())?;
+                motion = next_motion([c.tcp[0], c.tcp[1]], &est, cfg.slide, cfg.twist);
+                sim.set_tcp_rotation(est.rot)?;
                 Some(est)
             }
             None => None,
         };
         steps.push(Step {
             tcp: c.tcp,
+            rot: c.rot,
             wrench,
             estimate,
             image: image.is_some(),
             slide,
+            twist,
         });
     }
     let last = steps.last().map_or([0.0; 2], |s| [s.tcp[0], s.tcp[1]]);
+    let last_rot = steps.last().map_or([0.0; 3], |s| s.rot);
     Ok(TrialResult {
         offset,
         grip: truth.grip,
+        rot: truth.rot,
+        symmetry: cfg.symmetry,
         contacts: steps.len(),
         success,
         final_error: (last[0] - offset[0]).hypot(last[1] - offset[1]),
+        final_rot_error: rotation_error(last_rot, truth.rot, cfg.symmetry),
         wall: start.elapsed().as_secs_f64(),
         sim_time: sim.simulated() - sim_start,
         sim_wall,
@@ -430,7 +514,7 @@ mod tests {
             std: [1e-4, 1e-5],
             ..Estimate::default()
         };
-        match next_motion(tcp, &along_x, Some(c)) {
+        match next_motion(tcp, &along_x, Some(c), None) {
             Motion::Slide(a, b) => {
                 assert!((a[0] - 0.0012).abs() < 1e-12 && (b[0] - 0.0016).abs() < 1e-12);
                 assert!((a[1] - 0.002).abs() < 1e-12 && (b[1] - 0.002).abs() < 1e-12);
@@ -446,7 +530,7 @@ mod tests {
             corr: 0.98,
             ..Estimate::default()
         };
-        match next_motion([0.001, 0.001], &diagonal, Some(c)) {
+        match next_motion([0.001, 0.001], &diagonal, Some(c), None) {
             Motion::Slide(a, b) => {
                 assert!(a[0] > 0.0 && (a[0] - a[1]).abs() < 2e-6, "{a:?}");
                 assert!((b[0] + a[0]).abs() < 1e-12 && (b[1] + a[1]).abs() < 1e-12);
@@ -461,8 +545,75 @@ mod tests {
                 std,
                 ..Estimate::default()
             };
-            assert_eq!(next_motion(tcp, &e, slide), Motion::Contact(e.object));
+            assert_eq!(next_motion(tcp, &e, slide, None), Motion::Contact(e.object));
         }
+    }
+
+    #[test]
+    fn the_next_motion_twists_through_the_period_once_x_and_y_are_within_the_capture() {
+        let c = 2.5e-5;
+        let period = std::f64::consts::TAU / 8.0;
+        let twist = Twist {
+            clearance: c,
+            play: 0.5f64.to_radians(),
+            period: Some(period),
+        };
+        let at = |std: [f64; 2], yaw_std: f64| Estimate {
+            object: [0.001, -0.002],
+            std,
+            rot: [0.0, 0.0, 0.1],
+            rot_std: [0.0, 0.0, yaw_std],
+            ..Estimate::default()
+        };
+        // x, y within the capture, the yaw uncertain: a twist through one whole period
+        // about the estimated yaw, at the estimate.
+        match next_motion([0.0; 2], &at([5e-6, 8e-6], 0.05), Some(c), Some(twist)) {
+            Motion::Twist(p, from, to) => {
+                assert_eq!(p, [0.001, -0.002]);
+                assert!((from - (0.1 - period / 2.0)).abs() < 1e-12, "{from}");
+                assert!((to - (0.1 + period / 2.0)).abs() < 1e-12, "{to}");
+            }
+            m => panic!("{m:?}"),
+        }
+        // The yaw known within the play, or x, y not yet within the capture: no twist.
+        let known = at([5e-6, 8e-6], 0.001);
+        assert_eq!(
+            next_motion([0.0; 2], &known, Some(c), Some(twist)),
+            Motion::Contact(known.object)
+        );
+        let wide = at([1e-4, 1e-4], 0.05);
+        assert!(!matches!(
+            next_motion([0.0; 2], &wide, Some(c), Some(twist)),
+            Motion::Twist(..)
+        ));
+        // Without symmetry: SLIDE_SIGMAS of the yaw's spread each way.
+        let open = Twist {
+            period: None,
+            ..twist
+        };
+        match next_motion([0.0; 2], &at([5e-6, 8e-6], 0.05), Some(c), Some(open)) {
+            Motion::Twist(_, from, to) => {
+                assert!((to - from - 2.0 * SLIDE_SIGMAS * 0.05).abs() < 1e-12);
+            }
+            m => panic!("{m:?}"),
+        }
+    }
+
+    #[test]
+    fn rotation_errors_compose_and_count_modulo_the_symmetry() {
+        // A TCP at 20 degrees over a part at -24 degrees: -44 degrees, 1 modulo 45.
+        let deg = f64::to_radians;
+        let e = rotation_error([0.0, 0.0, deg(20.0)], [0.0, 0.0, deg(-24.0)], Some(8));
+        assert!((e[2] - deg(1.0)).abs() < 1e-12, "{e:?}");
+        let plain = rotation_error([0.0, 0.0, deg(20.0)], [0.0, 0.0, deg(-24.0)], None);
+        assert!((plain[2] - deg(-44.0)).abs() < 1e-12, "{plain:?}");
+        // Tilts compose as rotations: R_tcp^T R_object for two tilts about x and y.
+        let (a, b) = (deg(2.0), deg(-1.5));
+        let e = rotation_error([a, 0.0, 0.0], [0.0, b, 0.0], None);
+        let want = nalgebra::Rotation3::from_scaled_axis(nalgebra::Vector3::new(-a, 0.0, 0.0))
+            * nalgebra::Rotation3::from_scaled_axis(nalgebra::Vector3::new(0.0, b, 0.0));
+        let w = want.scaled_axis();
+        assert!((0..3).all(|k| (e[k] - w[k]).abs() < 1e-12), "{e:?} {w:?}");
     }
 
     #[test]

@@ -28,6 +28,9 @@ pub struct Contact {
     pub raw: [f64; 6],
     /// Task frame position relative to the nominal goal frame at the end (m).
     pub tcp: [f64; 3],
+    /// Task frame rotation relative to the nominal goal frame at the end (rotation
+    /// vector, rad).
+    pub rot: [f64; 3],
     /// Whether the motion settled.
     pub settled: bool,
     /// Whether part A settled on the goal: inserted.
@@ -47,6 +50,21 @@ pub trait World {
     /// sensor stays with the hand.
     fn set_grip(&mut self, xy: [f64; 2]);
 
+    /// Turns part B about its frame's origin by the rotation vector `rot` (rad): the
+    /// object's true rotation relative to the nominal goal.
+    ///
+    /// # Errors
+    /// When the world cannot turn part B that way.
+    fn set_object_rotation(&mut self, rot: [f64; 3]) -> Result<()>;
+
+    /// Turns the task frame (the robot's wrist) to the rotation vector `rot` (rad) relative
+    /// to the nominal goal for the motions that follow (Algorithm 1, step 14: the TCP goes
+    /// to the estimate, rotations included).
+    ///
+    /// # Errors
+    /// When the robot has no joint for a rotation that `rot` asks for.
+    fn set_tcp_rotation(&mut self, rot: [f64; 3]) -> Result<()>;
+
     /// One contact motion: approach at the commanded task-frame position `xy` (relative to
     /// the nominal goal) with the imposed force until the contact settles.
     fn contact_motion(&mut self, xy: [f64; 2]) -> Contact;
@@ -55,8 +73,27 @@ pub trait World {
     /// move to `to` that stops where part A drops into part B, else settles at `to`.
     fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact;
 
+    /// A twist under force: a contact motion at `xy` with the task frame turned to yaw
+    /// `from` (rad, about z), then, still pressing, a turn to `to` that stops where part A
+    /// drops into part B, else settles at `to`. The task frame stays turned where it ended.
+    ///
+    /// # Errors
+    /// When the robot cannot turn about z.
+    fn twist_motion(&mut self, xy: [f64; 2], from: f64, to: f64) -> Result<Contact>;
+
     /// Total simulated time so far (s); 0 for a world that does not simulate.
     fn simulated(&self) -> f64;
+}
+
+/// Refuses a rotation other than none in a world without rotations.
+fn no_rotation(what: &str, rot: [f64; 3]) -> Result<()> {
+    if rot == [0.0; 3] {
+        Ok(())
+    } else {
+        Err(HarnessError::MapWorld(format!(
+            "its maps have no rotation axes: {what} cannot turn by {rot:?} rad"
+        )))
+    }
 }
 
 /// Points a slide in the map world checks per radial clearance of the fit.
@@ -144,6 +181,7 @@ impl MapWorld {
         Contact {
             raw,
             tcp: [xy[0], xy[1], if inserted { 0.0 } else { cell[NCH - 1] }],
+            rot: [0.0; 3],
             settled: true,
             inserted,
             time: 0.0,
@@ -159,6 +197,16 @@ impl World for MapWorld {
     /// Reads the map at the grip offset; ignored on a map without grip axes.
     fn set_grip(&mut self, xy: [f64; 2]) {
         self.grip = xy;
+    }
+
+    /// The map world's maps have no rotation axes: only no rotation is accepted.
+    fn set_object_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
+        no_rotation("part B", rot)
+    }
+
+    /// As [`MapWorld::set_object_rotation`].
+    fn set_tcp_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
+        no_rotation("the TCP", rot)
     }
 
     fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {
@@ -179,6 +227,13 @@ impl World for MapWorld {
             })
             .find(|&p| self.geometry.inserts(self.offset(p)))
             .map_or_else(|| self.contact_at(to), |p| self.contact_at(p))
+    }
+
+    /// Its maps have no yaw: a twist that turns is refused, one that does not is a press.
+    fn twist_motion(&mut self, xy: [f64; 2], from: f64, to: f64) -> Result<Contact> {
+        no_rotation("the TCP", [0.0, 0.0, from])?;
+        no_rotation("the TCP", [0.0, 0.0, to])?;
+        Ok(self.contact_at(xy))
     }
 
     fn simulated(&self) -> f64 {

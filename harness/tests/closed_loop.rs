@@ -29,6 +29,8 @@ fn five_trials_succeed_within(
         spiral_step: 0.0,
         spiral_radius: 0.0,
         slide: None,
+        symmetry: None,
+        twist: None,
         settings: Settings {
             map,
             ..Settings::default()
@@ -81,4 +83,20 @@ fn a_5_trial_campaign_with_chamfers_succeeds_within_5_contacts() {
     let (task, mut sim) = common::chamfered("peg_in_hole", 0.5e-3, 0.5e-3);
     let map = computed_map(&task);
     five_trials_succeed_within(&task, &mut sim, Some(map), 5);
+}
+
+#[test]
+fn a_5_trial_octagon_campaign_succeeds_within_10_contacts() {
+    // The paper's task A: 0.05 mm across flats (100 trials: 2.87-3.01 contacts mean, max 5).
+    let (task, mut sim) = open_task("octagon").expect("the task and its scene");
+    let map = computed_map(&task);
+    five_trials_succeed_within(&task, &mut sim, Some(map), 10);
+}
+
+#[test]
+fn a_5_trial_gear_campaign_succeeds_within_10_contacts() {
+    // A bore onto a toothed shaft (100 trials: 2.46-2.51 contacts mean, max 5).
+    let (task, mut sim) = open_task("gear").expect("the task and its scene");
+    let map = computed_map(&task);
+    five_trials_succeed_within(&task, &mut sim, Some(map), 10);
 }

@@ -37,6 +37,8 @@ fn campaign(trials: usize, vision: bool) -> Vec<TrialResult> {
         spiral_step: 0.0,
         spiral_radius: 0.0,
         slide: None,
+        symmetry: None,
+        twist: None,
         settings: Settings {
             map: Some(map),
             vision: vision_file.clone(),

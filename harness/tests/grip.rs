@@ -69,6 +69,8 @@ fn five_trials_with_an_unknown_grip_go_in_through_the_fmu() {
         spiral_step: 0.0,
         spiral_radius: 0.0,
         slide: Some(task.geometry().expect("a [geometry]").clearance()),
+        symmetry: None,
+        twist: None,
         settings: Settings {
             map: Some(grip_map(&task)),
             particles: Some(16000),
@@ -80,7 +82,11 @@ fn five_trials_with_an_unknown_grip_go_in_through_the_fmu() {
     let truths: Vec<Truth> = objects
         .into_iter()
         .zip(grips)
-        .map(|(object, grip)| Truth { object, grip })
+        .map(|(object, grip)| Truth {
+            object,
+            grip,
+            ..Truth::default()
+        })
         .collect();
     let results =
         run_campaign(&mut sim, Some(&fmu), None, &cfg, &truths, 22).expect("the campaign runs");

@@ -121,6 +121,8 @@ fn in_a_world_without_mismatch_the_defaults_insert_the_peg_in_two_and_a_half_con
         spiral_step: 0.0,
         spiral_radius: 0.0,
         slide: Some(clearance),
+        symmetry: None,
+        twist: None,
         settings: Settings::default(),
     };
     let task = Task::find("peg_in_hole").expect("task peg_in_hole");

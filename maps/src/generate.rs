@@ -111,8 +111,8 @@ pub fn generate(
 }
 
 /// Revision of what a computed map holds, part of the cache key: raise it when a change
-/// to the generator changes the maps (2: the clearance in the metadata).
-const MAP_REVISION: u32 = 2;
+/// to the generator changes the maps (2: the clearance in the metadata; 3: the symmetry).
+const MAP_REVISION: u32 = 3;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and
@@ -190,6 +190,7 @@ pub fn generate_with(
         .collect(),
         generator: format!("ftmap {} ({})", env!("CARGO_PKG_VERSION"), backend.name()),
         clearance: task.geometry.as_ref().map(|g| g.clearance()),
+        symmetry: task.omega.symmetry,
     };
     let mut map = FtMap::zeros(grid.clone(), meta);
     if let Some([i, n]) = opts.shard {

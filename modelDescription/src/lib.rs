@@ -4,9 +4,10 @@
 //! [`xml()`]; the FMU, its tests and the harness's FMI driver take the names of the
 //! variables that belong together from the groups ([`WRENCH`], [`TCP`], [`CONTACT`],
 //! [`SLIDE`], [`SLIDE_START`], [`VISION_FEATURES`], [`VISION_VALID`], [`OBJECT`], [`GRIP`]
-//! and their spreads).
+//! and their spreads); both read the [`trace`] file format.
 
 mod table;
+pub mod trace;
 mod xml;
 
 pub use table::{

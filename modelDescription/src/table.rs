@@ -114,7 +114,7 @@ pub const CONTACT: &str = "contact";
 /// The contact ended a slide under force from `SLIDE_START`.
 pub const SLIDE: &str = "slide";
 /// Where a slide under force started (m, task frame relative to the nominal goal).
-pub const SLIDE_START: [&str; 2] = ["slide_start.x", "slide_start.y"];
+pub const SLIDE_START: [&str; 3] = ["slide_start.x", "slide_start.y", "slide_start.rz"];
 /// The vision feature inputs (px): the left and right distances from the active part's
 /// edge to the passive part's, then the passive part's left and right columns.
 pub const VISION_FEATURES: [&str; 4] = [
@@ -372,7 +372,8 @@ pub const VARIABLES: &[Variable] = &[
         "m",
         [Some(-1.0), Some(1.0)],
         "Radial clearance of the fit: a contact that did not go in rules out part B within it \
-         of the TCP (maps over object.x, object.y only; it replaces the depth channel there); \
+         of the TCP (maps over object.x, object.y, grip translations and object rotations \
+         with play; it replaces the depth channel there); \
          0: the map's (ftmap writes it from the task's geometry), none if the map has none; \
          negative: off",
     ),
@@ -397,6 +398,17 @@ pub const VARIABLES: &[Variable] = &[
         "Angle by which the map may miss the direction of the measured force and torque: across \
          the measured vector, that angle times its magnitude is added to sigma_force and \
          sigma_torque in quadrature",
+    ),
+    param(
+        "trace",
+        115,
+        VarType::String,
+        Start::String(""),
+        "",
+        [None, None],
+        "File to which every measurement appends the particles (pose in each uncertain DOF, \
+         weight) and the estimate, CSV (docs/fmu.md, Trace files); created if missing; empty: \
+         none",
     ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
@@ -500,8 +512,8 @@ pub const VARIABLES: &[Variable] = &[
         SLIDE,
         213,
         "The contact ended a slide under force from slide_start.x, slide_start.y \
-         that did not go in: the line swept rules out part B within the clearance \
-         of it, as a contact does of its point",
+         (a twist: from slide_start.rz) that did not go in: the line swept rules out \
+         part B within the clearance of it, as a contact does of its point",
     ),
     input(
         SLIDE_START[0],
@@ -514,6 +526,13 @@ pub const VARIABLES: &[Variable] = &[
         215,
         "m",
         "Where the slide started: y in the frame of tcp.y",
+    ),
+    input(
+        SLIDE_START[2],
+        216,
+        "rad",
+        "Where a twist under force (the TCP turned about z while pressing) started: \
+         rz in the frame of tcp.rz",
     ),
     // ---- Vision feature inputs (reserved: VISION_INPUT_VRS, 250..299) -------------------
     input(

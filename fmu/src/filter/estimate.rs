@@ -49,10 +49,14 @@ impl Estimate {
         let axes = lookup.axes();
         let d = axes.len();
         let w: Vec<f64> = lw.iter().map(|&l| f64::from(l).exp()).collect();
+        // Samples per turn of a periodic axis (its last sample is its first), else all.
+        let samples = |a: &super::MapAxis| a.period.map_or(a.count, |p| p as usize);
         let cell_of = |i: usize| -> usize {
             axes.iter()
                 .enumerate()
-                .map(|(k, a)| (pos[k * n + i].clamp(0.0, a.top()) + 0.5) as usize * a.stride)
+                .map(|(k, a)| {
+                    ((a.fold(pos[k * n + i]) + 0.5) as usize % samples(a).max(1)) * a.stride
+                })
                 .sum()
         };
         let mut order: Vec<(usize, u32)> = (0..n).map(|i| (cell_of(i), i as u32)).collect();
@@ -71,8 +75,15 @@ impl Estimate {
         let mut parent: Vec<usize> = (0..cells.len()).collect();
         for (c, &(key, ..)) in cells.iter().enumerate() {
             for a in axes {
-                if (key / a.stride) % a.count + 1 < a.count
-                    && let Ok(nb) = cells.binary_search_by_key(&(key + a.stride), |x| x.0)
+                let i = (key / a.stride) % a.count;
+                // The next sample along the axis, round the turn on a periodic one.
+                let next = match a.period {
+                    Some(_) if samples(a) > 1 => Some((i + 1) % samples(a)),
+                    _ => (i + 1 < a.count).then_some(i + 1),
+                };
+                if let Some(j) = next
+                    && let Ok(nb) =
+                        cells.binary_search_by_key(&(key - i * a.stride + j * a.stride), |x| x.0)
                 {
                     let (ra, rb) = (root(&mut parent, c), root(&mut parent, nb));
                     parent[ra.max(rb)] = ra.min(rb);
@@ -105,29 +116,39 @@ impl Estimate {
                 members[0],
                 |b, c| if cells[c].1 > cells[b].1 { c } else { b },
             );
-        let index = |cell: usize, a: &super::MapAxis| (cell / a.stride) % a.count;
+        let index = |cell: usize, a: &super::MapAxis| ((cell / a.stride) % a.count) as f32;
+        // Grid coordinates' difference `u - v`, the shortest way round on a periodic axis.
+        let diff = |k: usize, u: f32, v: f32| f64::from(axes[k].difference(u - v));
 
-        // Weighted mean of the particles within one cell of the mode.
+        // Weighted mean of the particles within one cell of the mode (about the mode, so
+        // that a periodic axis's mean does not straddle the turn).
+        let at_mode: Vec<f32> = axes.iter().map(|a| index(cells[mode].0, a)).collect();
         let mut near = vec![0.0f64; d];
         let mut near_w = 0.0;
         for &c in &members {
             let close = axes
                 .iter()
-                .all(|a| index(cells[c].0, a).abs_diff(index(cells[mode].0, a)) <= 1);
+                .enumerate()
+                .all(|(k, a)| diff(k, index(cells[c].0, a), at_mode[k]).abs() <= 1.0);
             if !close {
                 continue;
             }
             for &(_, i) in &order[cells[c].2..cells[c].3] {
                 let i = i as usize;
                 for k in 0..d {
-                    near[k] += w[i] * f64::from(pos[k * n + i]);
+                    near[k] += w[i] * diff(k, pos[k * n + i], at_mode[k]);
                 }
                 near_w += w[i];
             }
         }
         let est: Vec<f64> = near
             .iter()
-            .map(|s| if near_w > 0.0 { s / near_w } else { 0.0 })
+            .zip(axes)
+            .zip(&at_mode)
+            .map(|((s, a), &m)| {
+                let offset = if near_w > 0.0 { s / near_w } else { 0.0 };
+                f64::from(a.fold((f64::from(m) + offset) as f32))
+            })
             .collect();
         // Every particle's mean squared distance from the estimate (the other clusters are
         // where the truth may be too), and the x-y cross term.
@@ -141,7 +162,7 @@ impl Estimate {
         for cell in &cells {
             for &(_, i) in &order[cell.2..cell.3] {
                 let i = i as usize;
-                let e = |k: usize| f64::from(pos[k * n + i]) - est[k];
+                let e = |k: usize| diff(k, pos[k * n + i], est[k] as f32);
                 for (k, v) in var.iter_mut().enumerate() {
                     *v += w[i] * e(k) * e(k);
                 }
@@ -184,7 +205,7 @@ impl Estimate {
         for i in 0..n {
             let dist2: f64 = (0..d)
                 .map(|k| {
-                    let e = (f64::from(pos[k * n + i]) - est[k]) * scale[k];
+                    let e = diff(k, pos[k * n + i], est[k] as f32) * scale[k];
                     e * e
                 })
                 .sum();

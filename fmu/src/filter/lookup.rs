@@ -36,6 +36,9 @@ pub struct MapAxis {
     pub stride: usize,
     /// Component 0..6 of the TCP pose that moves this axis's map coordinate, if any.
     pub tcp: Option<usize>,
+    /// Period in grid units where the axis wraps around (`object.rz` of a map with an
+    /// n-fold symmetry about the approach: 2 pi / n, the whole axis).
+    pub period: Option<f32>,
 }
 
 impl MapAxis {
@@ -53,6 +56,29 @@ impl MapAxis {
     pub fn coord(&self, x: f64) -> f32 {
         ((x - self.min) / self.step) as f32
     }
+
+    /// Grid coordinate `u` brought into the axis: wrapped into [0, period) on a periodic
+    /// axis, clamped into [0, top] on another.
+    #[inline(always)]
+    pub fn fold(&self, u: f32) -> f32 {
+        match self.period {
+            Some(p) => {
+                let w = u.rem_euclid(p);
+                // rem_euclid may round up to p itself for a tiny negative u.
+                if w >= p { 0.0 } else { w }
+            }
+            None => u.clamp(0.0, self.top()),
+        }
+    }
+
+    /// The difference `d` of two grid coordinates, the shortest way round on a periodic axis.
+    #[inline(always)]
+    pub fn difference(&self, d: f32) -> f32 {
+        match self.period {
+            Some(p) => d - p * (d / p).round(),
+            None => d,
+        }
+    }
 }
 
 /// The map prepared for lookups.
@@ -68,6 +94,9 @@ pub struct Lookup {
     clearance: Option<f64>,
     /// Largest force and torque magnitudes over the map's cells.
     largest: [f64; 2],
+    /// Per axis, the fit's rotational play at zero offset (grid units; 0 but on object
+    /// rotations).
+    play: Vec<f32>,
 }
 
 /// How a predicted cell is weighed against a measurement (Eq. 3, -1/2 chi^2): each
@@ -135,7 +164,8 @@ impl Lookup {
         if grid.ndim() == 0 {
             return Err(bad("the map has no uncertain DOF".into()));
         }
-        let axes = grid
+        let symmetry = map.meta().symmetry;
+        let axes: Vec<MapAxis> = grid
             .axes()
             .iter()
             .enumerate()
@@ -149,8 +179,21 @@ impl Lookup {
                 // axis, whose TCP value is the measured contact height, not a displacement.
                 tcp: (a.dof.pose == Pose::Object && a.dof.axis != Axis::Z)
                     .then_some(a.dof.axis.index()),
+                period: (a.dof == Dof::new(Pose::Object, Axis::Rz) && symmetry.is_some())
+                    .then(|| (a.count - 1) as f32),
             })
             .collect();
+        if let Some(n) = symmetry
+            && let Some(a) = axes.iter().find(|a| a.period.is_some())
+        {
+            let period = std::f64::consts::TAU / f64::from(n);
+            if ((a.count - 1) as f64 * a.step - period).abs() > 1e-6 * period {
+                return Err(bad(format!(
+                    "object.rz spans {} rad, not the period 2 pi / {n} of the symmetry the metadata states",
+                    (a.count - 1) as f64 * a.step
+                )));
+            }
+        }
         let mut cells = Vec::with_capacity(grid.cells());
         let mut largest = [0.0f64; 2];
         for i in 0..grid.cells() {
@@ -177,6 +220,7 @@ impl Lookup {
             approach: map.meta().approach,
             clearance: map.meta().clearance,
             largest,
+            play: Vec::new(),
         };
         for i in 0..lookup.cells.len() {
             if lookup.inserted(f64::from(lookup.cells[i][NCH - 1])) {
@@ -185,7 +229,18 @@ impl Lookup {
                 cell[CONTACT] = 0.0;
             }
         }
+        lookup.play = lookup
+            .axes
+            .iter()
+            .enumerate()
+            .map(|(k, a)| (map.rotational_play(k) / a.step) as f32)
+            .collect();
         Ok(lookup)
+    }
+
+    /// The fit's rotational play of each axis (grid units, [`FtMap::rotational_play`]).
+    pub fn play(&self) -> &[f32] {
+        &self.play
     }
 
     /// The task the map was made for.
@@ -201,6 +256,11 @@ impl Lookup {
     /// The axes in map order.
     pub fn axes(&self) -> &[MapAxis] {
         &self.axes
+    }
+
+    /// The axes' DOF names (`object.x`, ...), in map order.
+    pub fn dof_names(&self) -> Vec<String> {
+        self.axes.iter().map(|a| a.dof.to_string()).collect()
     }
 
     /// Number of axes.
@@ -242,12 +302,48 @@ impl Lookup {
         -(self.approach[0] * tcp[0] + self.approach[1] * tcp[1] + self.approach[2] * tcp[2])
     }
 
-    /// The shift (grid units) that the TCP pose subtracts from each axis's coordinate.
-    pub fn tcp_shift(&self, tcp: &[f64; 6]) -> Vec<f32> {
-        self.axes
-            .iter()
-            .map(|a| a.tcp.map_or(0.0, |c| (tcp[c] / a.step) as f32))
-            .collect()
+    /// Writes each particle's map coordinates (grid units, axis-major like `pos`, folded
+    /// into the axes) for the TCP pose `tcp` into `out`: the object's pose relative to the
+    /// TCP's, T_tcp^-1 T_object (grip DOFs as they are). Without a TCP rotation that is the
+    /// particle's object pose minus the TCP's; with one, the poses are composed exactly.
+    pub fn relative(&self, pos: &[f32], tcp: &[f64; 6], out: &mut [f32]) {
+        let n = pos.len() / self.ndim().max(1);
+        if tcp[3..].iter().all(|r| *r == 0.0) {
+            for (k, a) in self.axes.iter().enumerate() {
+                let shift = a.tcp.map_or(0.0, |c| (tcp[c] / a.step) as f32);
+                for (o, &u) in out[k * n..(k + 1) * n]
+                    .iter_mut()
+                    .zip(&pos[k * n..(k + 1) * n])
+                {
+                    *o = a.fold(u - shift);
+                }
+            }
+            return;
+        }
+        use nalgebra::{Rotation3, Vector3};
+        let r_tcp = Rotation3::new(Vector3::new(tcp[3], tcp[4], tcp[5])).inverse();
+        // The TCP's z is the contact height, not a displacement (as without a rotation).
+        let t_tcp = Vector3::new(tcp[0], tcp[1], 0.0);
+        for i in 0..n {
+            let mut pose = [0.0f64; 6];
+            for (k, a) in self.axes.iter().enumerate() {
+                if a.dof.pose == Pose::Object {
+                    pose[a.dof.axis.index()] = a.value(pos[k * n + i]);
+                }
+            }
+            let t = r_tcp * (Vector3::new(pose[0], pose[1], pose[2]) - t_tcp);
+            let r = (r_tcp * Rotation3::new(Vector3::new(pose[3], pose[4], pose[5]))).scaled_axis();
+            for (k, a) in self.axes.iter().enumerate() {
+                out[k * n + i] = if a.dof.pose == Pose::Object {
+                    let c = a.dof.axis.index();
+                    let v = if c < 3 { t[c] } else { r[c - 3] };
+                    // A rotation read on its periodic axis: the nearest turn of the period.
+                    a.fold(a.coord(v))
+                } else {
+                    pos[k * n + i]
+                };
+            }
+        }
     }
 
     /// The padded channels at grid coordinates `u` (one per axis), multilinear, clamped.
@@ -284,25 +380,18 @@ impl Lookup {
     }
 
     /// Writes -1/2 of the weighted squared residual (Eq. 3 in log space, constants
-    /// dropped) of every particle into `out`. `pos` holds the particles' grid coordinates
-    /// axis-major (`pos[k * n + i]`), `shift` the TCP shift per axis, `w` the measurement
-    /// and its weights.
-    pub fn log_likelihood(
-        &self,
-        interp: Interpolation,
-        pos: &[f32],
-        shift: &[f32],
-        w: &Weights,
-        out: &mut [f32],
-    ) {
+    /// dropped) of every particle into `out`. `rel` holds the particles' map coordinates
+    /// axis-major (`rel[k * n + i]`, [`Lookup::relative`]), `w` the measurement and its
+    /// weights.
+    pub fn log_likelihood(&self, interp: Interpolation, rel: &[f32], w: &Weights, out: &mut [f32]) {
         macro_rules! dispatch {
             ($($d:literal)*) => {
                 match (self.ndim(), interp) {
                     $(
-                        ($d, Interpolation::Nearest) => self.ll_nearest::<$d>(pos, shift, w, out),
-                        ($d, Interpolation::Multilinear) => self.ll_linear::<$d>(pos, shift, w, out),
+                        ($d, Interpolation::Nearest) => self.ll_nearest::<$d>(rel, w, out),
+                        ($d, Interpolation::Multilinear) => self.ll_linear::<$d>(rel, w, out),
                     )*
-                    _ => self.ll_any(interp, pos, shift, w, out),
+                    _ => self.ll_any(interp, rel, w, out),
                 }
             };
         }
@@ -324,27 +413,27 @@ impl Lookup {
         (top, lo_max, stride, up)
     }
 
-    fn ll_nearest<const D: usize>(&self, pos: &[f32], shift: &[f32], w: &Weights, out: &mut [f32]) {
+    fn ll_nearest<const D: usize>(&self, rel: &[f32], w: &Weights, out: &mut [f32]) {
         let n = out.len();
         let (top, _, stride, _) = self.axis_params::<D>();
         for (i, o) in out.iter_mut().enumerate() {
             let mut idx = 0;
             for k in 0..D {
-                let t = (pos[k * n + i] - shift[k]).clamp(0.0, top[k]);
+                let t = rel[k * n + i].clamp(0.0, top[k]);
                 idx += (t + 0.5) as usize * stride[k];
             }
             *o = w.log_likelihood(&self.cells[idx]);
         }
     }
 
-    fn ll_linear<const D: usize>(&self, pos: &[f32], shift: &[f32], w: &Weights, out: &mut [f32]) {
+    fn ll_linear<const D: usize>(&self, rel: &[f32], w: &Weights, out: &mut [f32]) {
         let n = out.len();
         let (top, lo_max, stride, up) = self.axis_params::<D>();
         for (i, o) in out.iter_mut().enumerate() {
             let mut base = 0;
             let mut frac = [0.0f32; D];
             for k in 0..D {
-                let t = (pos[k * n + i] - shift[k]).clamp(0.0, top[k]);
+                let t = rel[k * n + i].clamp(0.0, top[k]);
                 let lo = (t as usize).min(lo_max[k]);
                 base += lo * stride[k];
                 frac[k] = t - lo as f32;
@@ -375,19 +464,12 @@ impl Lookup {
         }
     }
 
-    fn ll_any(
-        &self,
-        interp: Interpolation,
-        pos: &[f32],
-        shift: &[f32],
-        w: &Weights,
-        out: &mut [f32],
-    ) {
+    fn ll_any(&self, interp: Interpolation, rel: &[f32], w: &Weights, out: &mut [f32]) {
         let n = out.len();
         let mut u = vec![0.0f32; self.ndim()];
         for (i, o) in out.iter_mut().enumerate() {
             for (k, a) in self.axes.iter().enumerate() {
-                let t = (pos[k * n + i] - shift[k]).clamp(0.0, a.top());
+                let t = rel[k * n + i].clamp(0.0, a.top());
                 u[k] = match interp {
                     Interpolation::Nearest => t.round(),
                     Interpolation::Multilinear => t,

@@ -116,9 +116,10 @@ pub struct Measurement {
     pub vision: Option<VisionMeasurement>,
     /// No contact: only the image is evaluated (the wrench is ignored).
     pub vision_only: bool,
-    /// The contact ended a slide under force that started here (x, y in m, the frame of
-    /// `tcp`): the swept line is a negative contact too.
-    pub slide_start: Option<[f64; 2]>,
+    /// The contact ended a slide under force that started here (x, y in m, rz in rad, the
+    /// frame of `tcp`): the swept line, or for a twist about z the swept yaws, is a
+    /// negative contact too.
+    pub slide_start: Option<[f64; 3]>,
 }
 
 /// What a measurement update did, beyond the new estimate.
@@ -155,6 +156,8 @@ struct Scratch {
     ll: Vec<f32>,
     w: Vec<f32>,
     pos: Vec<f32>,
+    /// The particles' map coordinates relative to the TCP.
+    rel: Vec<f32>,
     pick: Vec<u32>,
 }
 
@@ -173,7 +176,8 @@ impl Filter {
             0.0 => lookup.clearance(),
             _ => None,
         };
-        let negative = clearance.and_then(|c| NegativeContact::new(lookup.axes(), c));
+        let negative =
+            clearance.and_then(|c| NegativeContact::new(lookup.axes(), lookup.play(), c));
         let mut f = Self {
             lookup,
             cfg,
@@ -188,6 +192,7 @@ impl Filter {
                 ll: vec![0.0; n],
                 w: vec![0.0; n],
                 pos: vec![0.0; n * d],
+                rel: vec![0.0; n * d],
                 pick: vec![0; n],
             },
         };
@@ -319,6 +324,7 @@ impl Filter {
         // (on a chamfer: how far down says how far off), where both count.
         let negative = self
             .negative
+            .as_ref()
             .filter(|_| !m.vision_only && !self.lookup.inserted(height));
         let use_depth = c.sigma_depth > 0.0
             && self.lookup.has_depth()
@@ -348,10 +354,10 @@ impl Filter {
         };
         let evidence = Evidence {
             negative: negative.map(|n| {
-                let tcp = [m.tcp[0], m.tcp[1]];
-                (n, m.slide_start.unwrap_or(tcp), tcp)
+                let tcp = [m.tcp[0], m.tcp[1], m.tcp[5]];
+                (n.clone(), m.slide_start.unwrap_or(tcp), tcp)
             }),
-            shift: self.lookup.tcp_shift(&m.tcp),
+            tcp: m.tcp,
             weights,
             force: !m.vision_only,
             vision,
@@ -374,16 +380,13 @@ impl Filter {
         Ok(report)
     }
 
-    /// Each particle's log-likelihood of `ev` (Eq. 3: map residuals, image residuals) into `ll`.
-    fn log_likelihood(&self, ev: &Evidence, ll: &mut [f32]) {
+    /// Each particle's log-likelihood of `ev` (Eq. 3: map residuals, image residuals) into
+    /// `ll`; `rel` receives the particles' map coordinates.
+    fn log_likelihood(&self, ev: &Evidence, rel: &mut [f32], ll: &mut [f32]) {
         if ev.force {
-            self.lookup.log_likelihood(
-                self.cfg.interpolation,
-                &self.pos,
-                &ev.shift,
-                &ev.weights,
-                ll,
-            );
+            self.lookup.relative(&self.pos, &ev.tcp, rel);
+            self.lookup
+                .log_likelihood(self.cfg.interpolation, rel, &ev.weights, ll);
             if self.cfg.tail > 0.0 {
                 // Multivariate Student-t in the Gaussian's chi^2 = -2 ll over the d channels
                 // used: log (1 + chi^2 / nu) ^ (-(nu + d) / 2).
@@ -394,7 +397,7 @@ impl Filter {
                 }
             }
             if let Some((negative, from, to)) = &ev.negative {
-                negative.add_log_likelihood(&self.pos, self.cfg.particles, *from, *to, ll);
+                negative.add_log_likelihood(&self.pos, rel, *from, *to, ll);
             }
         } else {
             ll.fill(0.0);
@@ -411,7 +414,8 @@ impl Filter {
     /// the linear weights in `scratch.w`.
     fn weigh(&mut self, ev: &Evidence, report: &mut Report) -> f64 {
         let mut ll = std::mem::take(&mut self.scratch.ll);
-        self.log_likelihood(ev, &mut ll);
+        let mut rel = std::mem::take(&mut self.scratch.rel);
+        self.log_likelihood(ev, &mut rel, &mut ll);
         let best = ll.iter().copied().fold(f32::NEG_INFINITY, f32::max);
         // NaN cannot occur (inputs are checked finite); `best` is -inf only for no particle.
         if best < UNDERFLOW {
@@ -424,7 +428,7 @@ impl Filter {
             for i in (offset..n).step_by(step) {
                 self.spread(i);
             }
-            self.log_likelihood(ev, &mut ll);
+            self.log_likelihood(ev, &mut rel, &mut ll);
             self.lw.fill(0.0);
         }
         // Each of the iterations weighs with the likelihood to the power 1 / iterations
@@ -434,6 +438,7 @@ impl Filter {
             *w += l * temper;
         }
         self.scratch.ll = ll;
+        self.scratch.rel = rel;
         normalise(&mut self.lw, &mut self.scratch.w)
     }
 
@@ -456,8 +461,9 @@ impl Filter {
         self.lw.fill(-(n as f32).ln());
     }
 
-    /// Gaussian jitter on every axis, clamped into Omega: `jitter` grid intervals, or less
-    /// once the particles' spread is small, so that the jitter of a measurement's
+    /// Gaussian jitter on every axis, clamped into Omega (wrapped on a periodic axis):
+    /// `jitter` grid intervals, or less once the particles' spread is small, so that the
+    /// jitter of a measurement's
     /// iterations together moves a particle by about [`JITTER_SPREAD`] of the spread: a
     /// fixed jitter would blur a posterior narrower than it (the last tens of micrometres
     /// of a fit) and with it what the earlier contacts said. It never falls below that
@@ -471,7 +477,7 @@ impl Filter {
             return;
         }
         let per_iteration = (JITTER_SPREAD / (self.cfg.iterations as f64).sqrt()) as f32;
-        let spreads = spreads(&self.pos, &self.lw);
+        let spreads = spreads(self.lookup.axes(), &self.pos, &self.lw);
         for (k, a) in self.lookup.axes().iter().enumerate() {
             let top = a.top();
             if top == 0.0 {
@@ -483,7 +489,7 @@ impl Filter {
             };
             let values = &mut self.pos[k * n..(k + 1) * n];
             let scale = s.min(per_iteration * spreads[k].max(scale_of_fit));
-            noise::jitter(&mut self.rng, values, scale, top);
+            noise::jitter(&mut self.rng, values, scale, |u| a.fold(u));
         }
     }
 }
@@ -528,11 +534,11 @@ impl Mismatch {
 
 /// What one measurement offers the particles, ready for every iteration.
 struct Evidence {
-    /// The negative contact from the slide's start (or the TCP) to the TCP's x, y (m), when
-    /// the contact did not go in.
-    negative: Option<(NegativeContact, [f64; 2], [f64; 2])>,
-    /// TCP shift of each map axis (grid units).
-    shift: Vec<f32>,
+    /// The negative contact from the slide's start (or the TCP) to the TCP's x, y (m) and
+    /// rz (rad), when the contact did not go in.
+    negative: Option<(NegativeContact, [f64; 3], [f64; 3])>,
+    /// The TCP pose the map coordinates are relative to.
+    tcp: [f64; 6],
     /// The measured channels and how the residual weighs them.
     weights: Weights,
     /// The wrench counts (a contact).
@@ -542,20 +548,37 @@ struct Evidence {
 }
 
 /// Weighted standard deviation on each axis of the particles `pos` (axis-major) under the
-/// normalised log weights `lw`, in one pass (one exponential per particle).
-fn spreads(pos: &[f32], lw: &[f32]) -> [f32; MAX_AXES] {
+/// normalised log weights `lw`, in one pass (one exponential per particle); on a periodic
+/// axis the circular one (from the mean resultant length).
+fn spreads(axes: &[MapAxis], pos: &[f32], lw: &[f32]) -> [f32; MAX_AXES] {
     let n = lw.len();
-    let d = (pos.len() / n.max(1)).min(MAX_AXES);
+    let d = axes.len().min(MAX_AXES);
     let (mut m, mut m2) = ([0.0f64; MAX_AXES], [0.0f64; MAX_AXES]);
     for (i, &l) in lw.iter().enumerate() {
         let w = f64::from(l.exp());
-        for k in 0..d {
+        for (k, a) in axes.iter().enumerate().take(d) {
             let v = f64::from(pos[k * n + i]);
-            m[k] += w * v;
-            m2[k] += w * v * v;
+            match a.period {
+                // The unit vector of the particle's phase: its mean's length says the spread.
+                Some(p) => {
+                    let phase = std::f64::consts::TAU * v / f64::from(p);
+                    m[k] += w * phase.cos();
+                    m2[k] += w * phase.sin();
+                }
+                None => {
+                    m[k] += w * v;
+                    m2[k] += w * v * v;
+                }
+            }
         }
     }
-    std::array::from_fn(|k| (m2[k] - m[k] * m[k]).max(0.0).sqrt() as f32)
+    std::array::from_fn(|k| match axes.get(k).and_then(|a| a.period) {
+        Some(p) => {
+            let length = m[k].hypot(m2[k]).clamp(1e-12, 1.0);
+            ((-2.0 * length.ln()).sqrt() * f64::from(p) / std::f64::consts::TAU) as f32
+        }
+        None => (m2[k] - m[k] * m[k]).max(0.0).sqrt() as f32,
+    })
 }
 
 /// A uniform number in [0, 1).
@@ -592,5 +615,7 @@ fn normalise(lw: &mut [f32], w: &mut [f32]) -> f64 {
     sum * sum / sum2
 }
 
+#[cfg(test)]
+mod rotation_tests;
 #[cfg(test)]
 mod tests;

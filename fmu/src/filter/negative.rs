@@ -11,8 +11,12 @@
 //!
 //! It applies to maps over `object.x`, `object.y`, with grip translations besides (a grip
 //! offset moves part A in the hand, and the object coordinates are the TCP position that
-//! aligns the parts whatever it is): with a rotation error part A may not go in even
-//! within the clearance.
+//! aligns the parts whatever it is) and object rotations whose play the map shows (cells
+//! through its centre inserted along them). With a rotation error part A goes in within
+//! less than the clearance, so the term rules out only the particles inside the diamond
+//! |offset| / clearance + sum |rotation error| / play < 1, a region the fit's insertion
+//! set holds when that set is convex (the octagon's and a tilted peg's are). Grip
+//! rotations, and object rotations without play, leave no such region: no term then.
 
 use ftmap::{Axis, Pose};
 
@@ -22,8 +26,12 @@ use super::lookup::MapAxis;
 /// but finite, so that a set that has only such particles is re-spread, not lost).
 pub const RULED_OUT: f32 = -30.0;
 
+/// A slide's or twist's start this close to its end (a share of the clearance or of the
+/// yaw's step) is its end.
+pub const UNMOVED: f64 = 0.01;
+
 /// The negative contact on one map.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct NegativeContact {
     /// The fit's radial clearance (m).
     pub clearance: f64,
@@ -31,43 +39,73 @@ pub struct NegativeContact {
     y: MapAxis,
     /// The particles' axis indices of `x` and `y`.
     axes: [usize; 2],
+    /// The object rotation axes: index, axis and play (grid units).
+    rotations: Vec<(usize, MapAxis, f32)>,
 }
 
 impl NegativeContact {
-    /// The term for a map with `axes`, when they are `object.x`, `object.y` and grip
-    /// translations, and the clearance is positive.
-    pub fn new(axes: &[MapAxis], clearance: f64) -> Option<Self> {
+    /// The term for a map with `axes` (with each axis's rotational `play`, grid units),
+    /// when they are `object.x`, `object.y`, grip translations and object rotations with
+    /// play, and the clearance is positive.
+    pub fn new(axes: &[MapAxis], play: &[f32], clearance: f64) -> Option<Self> {
         let find = |axis| {
             axes.iter()
                 .position(|a| a.dof.pose == Pose::Object && a.dof.axis == axis)
         };
-        let others_are_grip_translations = axes.iter().all(|a| {
-            (a.dof.pose == Pose::Object && matches!(a.dof.axis, Axis::X | Axis::Y))
-                || (a.dof.pose == Pose::Grip && !a.dof.axis.is_rotation())
+        let rotations: Vec<(usize, MapAxis, f32)> = axes
+            .iter()
+            .zip(play)
+            .enumerate()
+            .filter(|(_, (a, _))| a.dof.pose == Pose::Object && a.dof.is_rotation())
+            .map(|(k, (&a, &p))| (k, a, p))
+            .collect();
+        let others_allowed = axes.iter().zip(play).all(|(a, &p)| match a.dof.pose {
+            Pose::Object => matches!(a.dof.axis, Axis::X | Axis::Y) || p > 0.0,
+            Pose::Grip => !a.dof.axis.is_rotation(),
         });
         match (find(Axis::X), find(Axis::Y)) {
-            (Some(i), Some(j)) if others_are_grip_translations && clearance > 0.0 => Some(Self {
+            (Some(i), Some(j)) if others_allowed && clearance > 0.0 => Some(Self {
                 clearance,
                 x: axes[i],
                 y: axes[j],
                 axes: [i, j],
+                rotations,
             }),
             _ => None,
         }
     }
 
     /// Adds [`RULED_OUT`] to the log-likelihood of every particle (grid coordinates in
-    /// `pos`, axis-major over `n` particles) whose object offset lies within the clearance
-    /// of the segment from `from` to `to` (the TCP's x, y in m; a point where they are
-    /// equal, a slide's swept line where not).
+    /// `pos`, axis-major, its map coordinates relative to the TCP in `rel`) whose object
+    /// offset lies within the clearance of the motion that ended at `to` (the TCP's x, y in
+    /// m and rz in rad), less what its rotation errors use of the play. The motion started
+    /// at `from`: where only x, y differ, a slide, whose swept line counts; where only rz
+    /// differs, a twist about z, whose swept yaws count; where both differ, only its end.
+    /// Differences below [`UNMOVED`] of the clearance (x, y) or of the yaw's grid step (rz,
+    /// and any rz on a map without yaw) count as none: a robot's own jitter.
     pub fn add_log_likelihood(
         &self,
         pos: &[f32],
-        n: usize,
-        from: [f64; 2],
-        to: [f64; 2],
+        rel: &[f32],
+        from: [f64; 3],
+        to: [f64; 3],
         ll: &mut [f32],
     ) {
+        let n = ll.len();
+        let slid = (from[0] - to[0]).hypot(from[1] - to[1]) > UNMOVED * self.clearance;
+        let twisted = self
+            .rotations
+            .iter()
+            .any(|(_, a, _)| a.dof.axis == Axis::Rz && (from[2] - to[2]).abs() > UNMOVED * a.step);
+        let from = match (slid, twisted) {
+            (true, false) => [from[0], from[1], to[2]],
+            (false, true) => [to[0], to[1], from[2]],
+            _ => to,
+        };
+        let from = match (slid, twisted) {
+            (true, true) => to,
+            _ => from,
+        };
         // In clearances, relative to `to`.
         let (sx, sy) = (
             (self.x.step / self.clearance) as f32,
@@ -81,7 +119,26 @@ impl NegativeContact {
         let len2 = ax * ax + ay * ay;
         let [i, j] = self.axes;
         let (us, vs) = (&pos[i * n..(i + 1) * n], &pos[j * n..(j + 1) * n]);
-        for ((l, &u), &v) in ll.iter_mut().zip(us).zip(vs) {
+        for (i, ((l, &u), &v)) in ll.iter_mut().zip(us).zip(vs).enumerate() {
+            // The share of the clearance the rotation errors leave (a yaw error counted
+            // from the nearest yaw the twist passed).
+            let left = 1.0
+                - self
+                    .rotations
+                    .iter()
+                    .map(|(k, a, play)| {
+                        let e = a.difference(rel[k * n + i] - a.coord(0.0));
+                        let swept = if a.dof.axis == Axis::Rz {
+                            ((from[2] - to[2]) / a.step) as f32
+                        } else {
+                            0.0
+                        };
+                        beyond(a, e, swept) / play
+                    })
+                    .sum::<f32>();
+            if left <= 0.0 {
+                continue;
+            }
             let (dx, dy) = ((u - cx) * sx, (v - cy) * sy);
             // The nearest point of the segment, as a share of the way from `to` to `from`.
             let t = if len2 > 0.0 {
@@ -90,9 +147,24 @@ impl NegativeContact {
                 0.0
             };
             let (ex, ey) = (dx - t * ax, dy - t * ay);
-            if ex * ex + ey * ey < 1.0 {
+            if ex * ex + ey * ey < left * left {
                 *l += RULED_OUT;
             }
         }
+    }
+}
+
+/// How far the rotation error `e` (grid units) lies outside the interval between 0 and
+/// `swept` on axis `a`, the shortest way round on a periodic axis (0 inside it).
+fn beyond(a: &MapAxis, e: f32, swept: f32) -> f32 {
+    let (lo, hi) = (swept.min(0.0), swept.max(0.0));
+    let outside = |x: f32| (lo - x).max(x - hi).max(0.0);
+    match a.period {
+        Some(p) if hi - lo >= p => 0.0,
+        Some(p) => [-p, 0.0, p]
+            .iter()
+            .map(|k| outside(e + k))
+            .fold(f32::INFINITY, f32::min),
+        None => outside(e),
     }
 }

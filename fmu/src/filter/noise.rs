@@ -21,8 +21,14 @@ fn table() -> &'static [f32; SIZE] {
     })
 }
 
-/// Adds `scale` times a standard-normal draw to every value and clamps it into [0, top].
-pub fn jitter(rng: &mut Xoshiro256PlusPlus, values: &mut [f32], scale: f32, top: f32) {
+/// Adds `scale` times a standard-normal draw to every value and brings it back into its
+/// axis with `fold` (a clamp, or a wrap on a periodic axis).
+pub fn jitter(
+    rng: &mut Xoshiro256PlusPlus,
+    values: &mut [f32],
+    scale: f32,
+    fold: impl Fn(f32) -> f32,
+) {
     let t = table();
     let mut chunks = values.chunks_mut(5);
     for chunk in &mut chunks {
@@ -30,7 +36,7 @@ pub fn jitter(rng: &mut Xoshiro256PlusPlus, values: &mut [f32], scale: f32, top:
         for v in chunk {
             let z = t[(bits as usize) & (SIZE - 1)];
             bits >>= BITS;
-            *v = (*v + scale * z).clamp(0.0, top);
+            *v = fold(*v + scale * z);
         }
     }
 }
@@ -112,7 +118,7 @@ mod tests {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
         let n = 200_000;
         let mut v = vec![50.0f32; n];
-        jitter(&mut rng, &mut v, 0.5, 100.0);
+        jitter(&mut rng, &mut v, 0.5, |x| x.clamp(0.0, 100.0));
         let mean = v.iter().map(|&x| f64::from(x)).sum::<f64>() / n as f64;
         let var = v
             .iter()
@@ -122,10 +128,17 @@ mod tests {
         assert!((mean - 50.0).abs() < 0.01, "mean {mean}");
         assert!((var.sqrt() - 0.5).abs() < 0.01, "std {}", var.sqrt());
         let mut c = vec![0.1f32; 1000];
-        jitter(&mut rng, &mut c, 5.0, 0.2);
+        jitter(&mut rng, &mut c, 5.0, |x| x.clamp(0.0, 0.2));
         assert!(
             c.iter().all(|&x| (0.0..=0.2).contains(&x)),
             "clamped into [0, top]"
         );
+        let mut w = vec![0.1f32; 1000];
+        jitter(&mut rng, &mut w, 5.0, |x| x.rem_euclid(1.0));
+        assert!(
+            w.iter().all(|&x| (0.0..1.0).contains(&x)),
+            "wrapped into [0, 1)"
+        );
+        assert!(w.iter().any(|&x| x > 0.5), "wrapped, not clamped");
     }
 }

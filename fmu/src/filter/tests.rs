@@ -430,12 +430,11 @@ fn nearest_lookup_reads_cells_and_multilinear_interpolates() {
     // Every channel but the contact lane, which the filter never weighs.
     let inv: [f32; LANES] = std::array::from_fn(|l| if l < 7 { 1.0 } else { 0.0 });
     let w = Weights::diagonal(meas, inv);
-    lookup.log_likelihood(Interpolation::Multilinear, &half, &[0.0, 0.0], &w, &mut ll);
+    lookup.log_likelihood(Interpolation::Multilinear, &half, &w, &mut ll);
     assert!(ll[0].abs() < 1e-9, "{}", ll[0]);
     lookup.log_likelihood(
         Interpolation::Nearest,
         &[u[0] + 0.4, u[1] - 0.4],
-        &[0.0, 0.0],
         &w,
         &mut ll,
     );
@@ -682,7 +681,7 @@ fn a_slide_that_did_not_go_in_rules_out_the_line_it_swept() {
     // clearance of that line are out, not only those within the clearance of its end; the
     // truth, 0.06 mm beside the line, keeps its share.
     let x = 1.3e-4;
-    let slide = |start: Option<[f64; 2]>| {
+    let slide = |start: Option<[f64; 3]>| {
         let (mut f, truth) = near_the_hole(0.0);
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
         let mut m = measurement(truth[0], truth[1], [x, 2e-4], 1e-4, &mut rng);
@@ -693,7 +692,7 @@ fn a_slide_that_did_not_go_in_rules_out_the_line_it_swept() {
         let near_truth = weight_within(&f, truth, 0.0, 0.2 * c);
         (on_line, near_truth)
     };
-    let (swept_on, swept_truth) = slide(Some([x, -2e-4]));
+    let (swept_on, swept_truth) = slide(Some([x, -2e-4, 0.0]));
     let (end_on, end_truth) = slide(None);
     assert!(swept_on < 1e-9, "on the swept line: {swept_on}");
     assert!(
@@ -831,7 +830,7 @@ fn inputs_beyond_a_physical_magnitude_are_refused_by_name() {
     let cases: [(Spoil, &str); 3] = [
         (|m| m.wrench[0] = 2e19, "wrench.fx"),
         (|m| m.tcp[2] = -3e7, "tcp.z"),
-        (|m| m.slide_start = Some([0.0, 1e300]), "slide_start.y"),
+        (|m| m.slide_start = Some([0.0, 1e300, 0.0]), "slide_start.y"),
     ];
     for (spoil, name) in cases {
         let mut m = sound;

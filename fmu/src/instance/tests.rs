@@ -614,3 +614,43 @@ fn two_hundred_instances_on_eight_threads_share_one_map_and_match_a_serial_run()
     let lookup = |i: &Instance| i.filter.as_ref().expect("initialized").lookup().clone();
     assert!(Arc::ptr_eq(&lookup(&a), &lookup(&b)));
 }
+
+#[test]
+fn a_trace_holds_every_measurement_s_particles_and_the_outputs_estimate() {
+    let file = std::env::temp_dir().join(format!("ftfusion-trace-{}.csv", std::process::id()));
+    std::fs::remove_file(&file).ok();
+    let (mut i, _) = instance();
+    set_string(&mut i, "map", "peg.ftmap").expect("parameter");
+    set_int(&mut i, "particles", 500).expect("parameter");
+    set_string(&mut i, "trace", file.to_str().expect("UTF-8")).expect("parameter");
+    i.enter_initialization_mode().expect("allowed");
+    i.exit_initialization_mode().expect("valid parameters");
+    let truth = [2.1e-3, -3.3e-3];
+    for k in 0..2 {
+        assert_eq!(contact(&mut i, k as f64, truth, [0.0, 0.0]), Status::Ok);
+    }
+    let text = std::fs::read(&file).expect("the trace was written");
+    let back = model_description::trace::read(text.as_slice()).expect("it reads back");
+    assert_eq!(back.len(), 2);
+    for (k, m) in back.iter().enumerate() {
+        assert_eq!(m.measurement, k as u32 + 1);
+        assert_eq!(m.dofs, ["object.x", "object.y"]);
+        assert_eq!(m.poses.len(), 500);
+        let total: f64 = m.weights.iter().sum();
+        assert!((total - 1.0).abs() < 1e-3, "weights sum to {total}");
+    }
+    // The last estimate row is what the outputs say.
+    let last = &back[1];
+    assert!((last.estimate[0] - real(&i, "object.x")).abs() < 1e-12);
+    assert!((last.estimate[1] - real(&i, "object.y")).abs() < 1e-12);
+    assert!((last.confidence - real(&i, "confidence")).abs() < 1e-12);
+    std::fs::remove_file(&file).ok();
+    // A file that cannot be created fails initialization naming it.
+    let (mut i, _) = instance();
+    set_string(&mut i, "map", "peg.ftmap").expect("parameter");
+    set_string(&mut i, "trace", "/does/not/exist/trace.csv").expect("parameter");
+    i.enter_initialization_mode().expect("allowed");
+    let e = i.exit_initialization_mode().expect_err("no such folder");
+    assert!(matches!(e, FusionError::Trace { .. }), "{e}");
+    assert!(e.to_string().contains("/does/not/exist/trace.csv"), "{e}");
+}

@@ -52,6 +52,7 @@ pub fn peg_map(size: f64, step: f64, rot: Option<(f64, f64)>) -> ftmap::Result<F
         sources: Vec::new(),
         generator: "ftfusion::synthetic".into(),
         clearance: Some(CLEARANCE),
+        symmetry: None,
     };
     let mut map = FtMap::zeros(grid, meta);
     for cell in 0..map.grid().cells() {

@@ -120,6 +120,13 @@ pub enum Command {
         #[arg(long, default_value = "out/compare_runs.png")]
         plot: PathBuf,
     },
+    /// Campaigns in one Markdown table (their summary.json): task, DOFs, success, contacts
+    /// per trial, the last approach's error per DOF.
+    Table {
+        /// Campaign output folders.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+    },
     /// Per-channel agreement of two maps over the cells of the first; writes a plot.
     CompareMaps {
         /// First map (its cells are compared).
@@ -210,6 +217,10 @@ pub struct RunArgs {
     /// (pf only).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub slide: Switch,
+    /// Twists under force about z across the yaw's spread once x, y are within the
+    /// capture, where the task's yaw is uncertain (pf only).
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub twist: Switch,
     /// The FMU.
     #[arg(long, env = "FTFUSION_FMU")]
     pub fmu: Option<PathBuf>,
@@ -336,6 +347,7 @@ impl RunArgs {
             strategy: self.strategy.into(),
             sensor_noise: self.sensor_noise == Switch::On,
             slide: self.slide == Switch::On,
+            twist: self.twist == Switch::On,
             fmu: self.fmu,
             max_contacts: self.max_contacts,
             max_sim_time: self.max_sim_time,

@@ -108,6 +108,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             comparison.plot(&plot)?;
             println!("plot {}", plot.display());
         }
+        Command::Table { dirs } => {
+            print!("{}", harness::table::CampaignTable::read(&dirs)?);
+        }
         Command::CompareRuns { a, b, plot } => {
             let comparison = RunsComparison::read(&a, &b)?;
             print!("{comparison}");

@@ -64,6 +64,10 @@ pub struct MapMeta {
     /// less than this off the TCP (at zero rotation error); absent when unknown.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub clearance: Option<f64>,
+    /// n-fold symmetry of the fit about the approach axis: `object.rz` wraps with period
+    /// 2 pi / n; absent when the parts have none that Omega uses.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub symmetry: Option<u32>,
 }
 
 /// A Force Torque Map: `NCH` values per cell of a grid, cell-major.
@@ -154,6 +158,39 @@ impl FtMap {
         self.depth_range().map(|[lo, hi]| 0.5 * (lo + hi))
     }
 
+    /// The fit's rotational play along axis `k`, a whole number of grid steps below the
+    /// true one: one step short of how far from zero the cells through the map's centre
+    /// (every other axis at its sample nearest zero) stay inserted both ways, since the
+    /// depth maps' pixel may round the fit open by up to a step (octagon_yaw: inserted to
+    /// ±1° on its 0.05 mm pixel, ±0.70° by the geometry; play 0.5°). 0 where `k` is no
+    /// object rotation, the map has no depths or its centre is not inserted.
+    pub fn rotational_play(&self, k: usize) -> f64 {
+        let Some(a) = self.grid.axes().get(k) else {
+            return 0.0;
+        };
+        let Some(middle) = self.contact_depth() else {
+            return 0.0;
+        };
+        if !(a.dof.pose == crate::Pose::Object && a.dof.is_rotation()) {
+            return 0.0;
+        }
+        let mut idx = [0usize; crate::task::omega::MAX_AXES];
+        for (j, b) in self.grid.axes().iter().enumerate() {
+            idx[j] = b.nearest(0.0);
+        }
+        let centre = idx[k];
+        let mut inserted = |i: usize| {
+            idx[k] = i;
+            self.cell(self.grid.flat(&idx[..self.grid.ndim()]))[NCH - 1] < middle
+        };
+        if !inserted(centre) {
+            return 0.0;
+        }
+        let up = (centre + 1..a.count).take_while(|&i| inserted(i)).count();
+        let down = (0..centre).rev().take_while(|&i| inserted(i)).count();
+        up.min(down).saturating_sub(1) as f64 * a.step
+    }
+
     /// The channels of a contact at `coords`: multilinear over the surrounding cells where
     /// part A rests on part B (depth at or above `contact_depth`, from
     /// [`FtMap::contact_depth`], which reads every cell: find it once), leaving out the
@@ -235,6 +272,7 @@ pub(crate) mod tests {
             }],
             generator: "test".into(),
             clearance: None,
+            symmetry: None,
         };
         let mut map = FtMap::zeros(grid, meta);
         for cell in 0..map.grid().cells() {

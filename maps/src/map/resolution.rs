@@ -91,8 +91,9 @@ impl fmt::Display for Coarse {
                 f,
                 "{dof}'s step {:.4} mm is wider than the fit's diametral gap {:.4} mm: the \
                  cells where the part goes in fall between the grid's nodes (the FMU's negative \
-                 contact, which states them exactly, applies to maps over object.x, object.y \
-                 and grip translations only); set the step <= {:.4} mm",
+                 contact states them exactly on maps over object.x, object.y and grip \
+                 translations; with object rotations, only the part within the rotational \
+                 play the map shows); set the step <= {:.4} mm",
                 step * mm,
                 gap * mm,
                 gap * mm

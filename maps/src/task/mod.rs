@@ -68,10 +68,37 @@ pub struct Omega {
     /// Rotational step (rad).
     #[serde(default = "default_delta_rot")]
     pub delta_rot: f64,
+    /// n-fold symmetry of the fit about the approach axis (z): the parts look the same
+    /// after 1/n of a turn, so `object.rz` wraps around with period 2 pi / n. Omega's
+    /// rotational bound must then be half that period (pi / n).
+    #[serde(default)]
+    pub symmetry: Option<u32>,
 }
 
 fn default_delta_rot() -> f64 {
     0.5f64.to_radians()
+}
+
+/// Checks an n-fold symmetry about the approach: n >= 2, the approach along z (the axis
+/// of `rz`), and Omega's rotations spanning exactly one period in whole steps.
+fn check_symmetry(n: u32, o: &Omega, approach: [f64; 3]) -> std::result::Result<(), String> {
+    if n < 2 {
+        return Err(format!("omega.symmetry {n} must be >= 2"));
+    }
+    if approach[2].abs() < 1.0 - 1e-9 {
+        return Err(format!(
+            "omega.symmetry is about the approach axis, which must be z (rz's axis); contact.approach is {approach:?}"
+        ));
+    }
+    let half = std::f64::consts::PI / f64::from(n);
+    let steps = half / o.delta_rot;
+    if (o.size_rot - half).abs() > 1e-9 || (steps - steps.round()).abs() > 1e-6 {
+        return Err(format!(
+            "omega.symmetry {n}: size_rot {} must be half the period (pi / {n} = {half}) and a whole multiple of delta_rot {}",
+            o.size_rot, o.delta_rot
+        ));
+    }
+    Ok(())
 }
 
 /// Settings of the z-buffer computation.
@@ -267,6 +294,9 @@ impl Task {
                 d.pixel, d.tolerance
             )));
         }
+        if let Some(n) = file.omega.symmetry {
+            check_symmetry(n, &file.omega, contact.approach).map_err(err)?;
+        }
         let task = Self {
             name: file.name,
             description: file.description,
@@ -437,7 +467,23 @@ mod tests {
         let path = dir.join("task.toml");
         let bearing = text_of("bearing_housing");
         let peg = text_of("peg_in_hole");
+        let yaw = text_of("octagon_yaw");
         let cases = [
+            (
+                yaw.replace("symmetry = 8 ", "symmetry = 6 "),
+                "omega.symmetry",
+                "half the period",
+            ),
+            (
+                yaw.replace("symmetry = 8 ", "symmetry = 1 "),
+                "omega.symmetry",
+                ">= 2",
+            ),
+            (
+                yaw.replace("approach = [0.0, 0.0, -1.0]", "approach = [1.0, 0.0, 0.0]"),
+                "omega.symmetry",
+                "must be z",
+            ),
             (
                 bearing.replace("fovy = 12.0", "fovy = 200.0"),
                 "[camera]",
@@ -486,7 +532,7 @@ mod tests {
         ];
         for (text, table, needle) in cases {
             assert!(
-                text != bearing && text != peg,
+                text != bearing && text != peg && text != yaw,
                 "{needle}: the case changes a file"
             );
             std::fs::write(&path, &text).expect("write");

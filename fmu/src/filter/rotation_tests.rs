@@ -1,0 +1,247 @@
+//! Tests of the filter on a map with a periodic yaw axis (an 8-fold symmetric fit): map
+//! coordinates under a turned TCP against the closed-form relative pose, the estimate of a
+//! set that straddles the period's seam, and the negative contact's rotational play.
+
+use std::path::Path;
+
+use ftmap::{Axis, Dof, FtMap, Grid, GridAxis, MapMeta, Pose, WrenchModel};
+
+use super::*;
+
+/// Radial clearance of the synthetic fit (m).
+const CLEARANCE: f64 = 5e-5;
+/// Yaw step of the synthetic map (rad): 2.5 degrees, 18 steps per eighth of a turn.
+const YAW_STEP: f64 = std::f64::consts::PI / 72.0;
+
+/// A map over object x, y (±1 mm at 0.1 mm) and yaw (one period of an 8-fold symmetry):
+/// a torque whose direction turns with the yaw, inserted within the clearance and two
+/// yaw steps of zero (a play of one step: [`FtMap::rotational_play`]).
+fn yaw_map() -> FtMap {
+    let dof = |a| Dof::new(Pose::Object, a);
+    let period = std::f64::consts::TAU / 8.0;
+    let grid = Grid::new(vec![
+        GridAxis::symmetric(dof(Axis::X), 1e-3, 1e-4).expect("x"),
+        GridAxis::symmetric(dof(Axis::Y), 1e-3, 1e-4).expect("y"),
+        GridAxis::symmetric(dof(Axis::Rz), period / 2.0, YAW_STEP).expect("rz"),
+    ])
+    .expect("grid");
+    let meta = MapMeta {
+        task: "synthetic_yaw".into(),
+        model: WrenchModel::Centroid,
+        approach: [0.0, 0.0, -1.0],
+        force: 50.0,
+        friction: 0.0,
+        sensor_origin: [0.0; 3],
+        pixel: 0.0,
+        sources: Vec::new(),
+        generator: "ftfusion::synthetic".into(),
+        clearance: Some(CLEARANCE),
+        symmetry: Some(8),
+    };
+    let mut map = FtMap::zeros(grid, meta);
+    for cell in 0..map.grid().cells() {
+        let c = map.grid().coords(cell);
+        let inserted = c[0].hypot(c[1]) < CLEARANCE && c[2].abs() <= YAW_STEP * 2.01;
+        let phase = 8.0 * c[2];
+        *map.cell_mut(cell) = if inserted {
+            [0.0; 7]
+        } else {
+            [
+                0.0,
+                0.0,
+                50.0,
+                (200.0 * c[1] + 0.05 * phase.cos()) as f32,
+                (-200.0 * c[0] + 0.05 * phase.sin()) as f32,
+                0.0,
+                0.01,
+            ]
+        };
+    }
+    map
+}
+
+fn filter(particles: usize) -> Filter {
+    Filter::new(
+        &yaw_map(),
+        Path::new("synthetic"),
+        Config {
+            particles,
+            ..Config::default()
+        },
+    )
+    .expect("filter")
+}
+
+/// `(x, y, yaw)` of particle `i` as grid coordinates.
+fn place(f: &mut Filter, i: usize, pose: [f64; 3]) {
+    let n = f.cfg.particles;
+    for (k, v) in pose.iter().enumerate() {
+        f.pos[k * n + i] = f.lookup.axes()[k].coord(*v);
+    }
+}
+
+#[test]
+fn the_yaw_axis_wraps_and_shows_the_fit_s_play() {
+    let f = filter(10);
+    let axes = f.lookup.axes();
+    assert_eq!(axes[2].period, Some(18.0));
+    assert_eq!((axes[0].period, axes[1].period), (None, None));
+    // Inserted within two yaw steps of zero at zero offset: a play of one step.
+    assert_eq!(f.lookup.play(), &[0.0, 0.0, 1.0]);
+    assert!(f.negative_contact().is_some());
+}
+
+#[test]
+fn map_coordinates_under_a_turned_tcp_are_the_relative_pose() {
+    let mut f = filter(4);
+    let poses = [
+        [3e-4, -2e-4, 0.1],
+        [-5e-4, 4e-4, -0.35],
+        [1e-4, 1e-4, 0.38],
+        [0.0, -6e-4, 0.0],
+    ];
+    for (i, p) in poses.iter().enumerate() {
+        place(&mut f, i, *p);
+    }
+    let tcp = [1e-4, -1e-4, 0.01, 0.0, 0.0, 0.3];
+    let mut rel = vec![0.0; 12];
+    f.lookup.relative(&f.pos, &tcp, &mut rel);
+    let period = std::f64::consts::TAU / 8.0;
+    for (i, p) in poses.iter().enumerate() {
+        // The offset turned back by the TCP's yaw, the yaw's difference within half a period.
+        let (dx, dy) = (p[0] - tcp[0], p[1] - tcp[1]);
+        let (s, c) = tcp[5].sin_cos();
+        let mut yaw = p[2] - tcp[5];
+        yaw -= period * (yaw / period).round();
+        let want = [c * dx + s * dy, -s * dx + c * dy, yaw];
+        for (k, w) in want.iter().enumerate() {
+            let got = f.lookup.axes()[k].value(rel[k * 4 + i]);
+            assert!(
+                (got - w).abs() < 1e-6,
+                "particle {i}, axis {k}: {got} vs {w}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_set_straddling_the_seam_is_one_cluster_at_the_seam() {
+    // Half the particles just below +22.5 degrees, half just above -22.5: one pose.
+    let mut f = filter(1000);
+    let half = std::f64::consts::PI / 8.0;
+    for i in 0..1000 {
+        let d = 0.01 * (i % 10) as f64 / 10.0;
+        let yaw = if i % 2 == 0 { half - d } else { -half + d };
+        place(&mut f, i, [2e-4, -3e-4, yaw]);
+    }
+    let e = Estimate::compute(&f.lookup, &f.cfg, &f.pos, &f.lw);
+    assert_eq!(e.clusters, 1, "{e:?}");
+    assert!(e.pose[2].abs() > half - 0.01, "{e:?}");
+    assert!(e.std[2] < 0.01, "{e:?}");
+    let s = spreads(f.lookup.axes(), &f.pos, &f.lw);
+    assert!(f64::from(s[2]) * YAW_STEP < 0.01, "{s:?}");
+}
+
+#[test]
+fn the_negative_contact_spares_the_particles_the_yaw_keeps_out() {
+    let mut f = filter(4);
+    let (yaw_in, yaw_out) = (0.5 * YAW_STEP, 1.5 * YAW_STEP);
+    // Within the clearance at half the play: out where the offset is within the half
+    // the play leaves; beyond the play: spared at any offset.
+    for (i, p) in [
+        [0.3 * CLEARANCE, 0.0, yaw_in],
+        [0.7 * CLEARANCE, 0.0, yaw_in],
+        [0.0, 0.0, yaw_out],
+        [0.0, 0.2 * CLEARANCE, 0.0],
+    ]
+    .iter()
+    .enumerate()
+    {
+        place(&mut f, i, *p);
+    }
+    let tcp = [0.0, 0.0, 0.01, 0.0, 0.0, 0.0];
+    let mut rel = vec![0.0; 12];
+    f.lookup.relative(&f.pos, &tcp, &mut rel);
+    let mut ll = vec![0.0; 4];
+    let nc = f.negative_contact().expect("the term applies").clone();
+    nc.add_log_likelihood(&f.pos, &rel, [0.0; 3], [0.0; 3], &mut ll);
+    let out: Vec<bool> = ll.iter().map(|l| *l < -1.0).collect();
+    assert_eq!(out, [true, false, false, true], "{ll:?}");
+}
+
+#[test]
+fn a_twist_rules_out_the_yaws_it_passed_round_the_seam() {
+    // A twist from 20 to 25 degrees crosses the seam at 22.5 (25 is -20 of the next
+    // period). Particles at the TCP's x, y: out where their yaw lies on the way (or within
+    // the play of it), spared elsewhere.
+    let mut f = filter(5);
+    let deg = f64::to_radians;
+    let (start, end) = (deg(20.0), deg(25.0));
+    let yaws = [deg(-22.0), deg(21.0), deg(0.0), deg(-18.5), deg(10.0)];
+    for (i, y) in yaws.iter().enumerate() {
+        place(&mut f, i, [0.0, 0.0, *y]);
+    }
+    let tcp = [0.0, 0.0, 0.01, 0.0, 0.0, end];
+    let mut rel = vec![0.0; 15];
+    f.lookup.relative(&f.pos, &tcp, &mut rel);
+    let mut ll = vec![0.0; 5];
+    let nc = f.negative_contact().expect("the term applies").clone();
+    nc.add_log_likelihood(&f.pos, &rel, [0.0, 0.0, start], [0.0, 0.0, end], &mut ll);
+    let out: Vec<bool> = ll.iter().map(|l| *l < -1.0).collect();
+    // -22 (= 23) and 21: passed; 0, 10: not; -18.5 (= 26.5): within the play (2.5
+    // degrees) of the end.
+    assert_eq!(out, [true, true, false, true, false], "{ll:?}");
+    // Without the twist's start only the end's play counts: 23 and 21 are spared.
+    let mut ll = vec![0.0; 5];
+    nc.add_log_likelihood(&f.pos, &rel, [0.0, 0.0, end], [0.0, 0.0, end], &mut ll);
+    let out: Vec<bool> = ll.iter().map(|l| *l < -1.0).collect();
+    assert_eq!(out, [true, false, false, true, false], "{ll:?}");
+}
+
+/// The synthetic map's measurement of part B at `truth` (x, y, yaw) from a TCP at `tcp`
+/// (x, y, yaw): the map at the relative pose, the yaw's difference within half a period.
+fn measured(map: &FtMap, truth: [f64; 3], tcp: [f64; 3]) -> Measurement {
+    let (s, c) = tcp[2].sin_cos();
+    let (dx, dy) = (truth[0] - tcp[0], truth[1] - tcp[1]);
+    let period = std::f64::consts::TAU / 8.0;
+    let mut yaw = truth[2] - tcp[2];
+    yaw -= period * (yaw / period).round();
+    let m = map
+        .interpolate(&[c * dx + s * dy, -s * dx + c * dy, yaw])
+        .expect("inside the map");
+    Measurement {
+        wrench: [m[0], m[1], m[2], m[3], m[4], m[5]],
+        tcp: [tcp[0], tcp[1], m[6], 0.0, 0.0, tcp[2]],
+        ..Measurement::default()
+    }
+}
+
+#[test]
+fn the_filter_recovers_a_known_yaw_across_the_seam() {
+    // Contacts from turned TCPs; the yaw 22 degrees (and -22.4: near the seam either way).
+    let map = yaw_map();
+    for yaw in [22f64.to_radians(), -22.4f64.to_radians(), 0.12] {
+        let truth = [3e-4, -2e-4, yaw];
+        let mut f = Filter::new(
+            &map,
+            Path::new("synthetic"),
+            Config {
+                particles: 4000,
+                ..Config::default()
+            },
+        )
+        .expect("filter");
+        for tcp in [[0.0, 0.0, 0.0], [-4e-4, 2e-4, 0.2], [5e-4, 4e-4, -0.3]] {
+            f.measure(&measured(&map, truth, tcp)).expect("finite");
+        }
+        let e = f.estimate();
+        let period = std::f64::consts::TAU / 8.0;
+        let mut err = e.pose[2] - yaw;
+        err -= period * (err / period).round();
+        assert!(err.abs() < YAW_STEP, "yaw {yaw}: estimate {e:?}");
+        assert!(
+            (e.pose[0] - truth[0]).hypot(e.pose[1] - truth[1]) < 1e-4,
+            "yaw {yaw}: estimate {e:?}"
+        );
+    }
+}
