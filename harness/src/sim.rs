@@ -41,6 +41,10 @@ pub const INSERTION_SPEED: f64 = 0.1;
 pub const INSERTION_TIME: f64 = 0.01;
 /// Speed of a slide under force (m/s).
 pub const SLIDE_SPEED: f64 = 0.005;
+/// The largest Euler angle about an axis without a hinge that a TCP rotation may ask for
+/// and have dropped (rad): two tilts' rotation vector [rx, ry, 0] holds a yaw of about
+/// rx ry / 2 in the wrist's Euler angles, 0.6 mrad at 2 degrees each.
+pub const UNHINGED: f64 = 1e-3;
 /// Turning speed of a twist under force (rad/s): a degree in 87 time steps.
 pub const TWIST_SPEED: f64 = 1.0;
 /// A slide stops where part A has dropped this far below part B's top (m).
@@ -196,11 +200,31 @@ impl Sim {
         d.mocap_pos_mut()[self.mocap] = [b[0], b[1], 0.0];
         let q = UnitQuaternion::from_scaled_axis(Vector3::from(self.object_rot));
         d.mocap_quat_mut()[self.mocap] = [q.w, q.i, q.j, q.k];
-        let start = [xy[0], xy[1], self.spec.top + APPROACH_CLEARANCE];
+        // A tilted part A feeds along its own axis (the map's approach is the tool's): the
+        // carriage's x, y follow its height by `lean`, so that `xy` is where the task frame
+        // meets the goal's height (z = 0; at the top it is `lean` times that height off);
+        // it starts higher by how far its face's edge dips.
+        let [ax, ay, az] = self.wrist_angles;
+        let tool = Rotation3::from_euler_angles(ax, ay, az) * Vector3::z();
+        let lean = [tool.x / tool.z, tool.y / tool.z];
+        let tilted = lean != [0.0, 0.0];
+        let dip = if tilted {
+            self.spec.face.reach * tool.x.hypot(tool.y)
+        } else {
+            0.0
+        };
+        let start = [xy[0], xy[1], self.spec.top + APPROACH_CLEARANCE + dip];
+        let follow = |z: f64, k: usize| z * lean[k];
+        let mut planned = xy;
+        let start = [
+            xy[0] + follow(start[2], 0),
+            xy[1] + follow(start[2], 1),
+            start[2],
+        ];
         for (k, &q) in self.qpos.iter().enumerate() {
             d.qpos_mut()[q] = start[k];
         }
-        let ctrl = [xy[0], xy[1], -self.spec.force, 0.0];
+        let ctrl = [start[0], start[1], -self.spec.force, 0.0];
         for (k, &a) in self.actuators.iter().enumerate() {
             d.ctrl_mut()[a] = ctrl[k];
         }
@@ -228,13 +252,20 @@ impl Sim {
             if z < entered {
                 d.ctrl_mut()[self.actuators[3]] = -INSERTION_SPEED.min(z.max(0.0) / INSERTION_TIME);
             }
+            if tilted {
+                for (k, p) in planned.iter().enumerate() {
+                    d.ctrl_mut()[self.actuators[k]] = p + follow(z, k);
+                }
+            }
             if let Some((to, speed, len, t0)) = sliding {
                 let done = ((steps - t0) as f64 * dt * speed / len).min(1.0);
                 let at = |k: usize, d: &MjData<Box<MjModel>>| d.qpos()[k];
                 if z < dropped {
                     // The edge dropped in: hold the carriage (and wrist) where part A is.
-                    for (&q, &a) in self.qpos.iter().zip(&self.actuators).take(2) {
-                        d.ctrl_mut()[a] = at(q, d);
+                    for (k, p) in planned.iter_mut().enumerate() {
+                        let here = at(self.qpos[k], d);
+                        d.ctrl_mut()[self.actuators[k]] = here;
+                        *p = here - follow(z, k);
                     }
                     if let Some(h) = twist {
                         d.ctrl_mut()[h.actuator] = at(h.qpos, d);
@@ -251,8 +282,9 @@ impl Sim {
                     };
                     match to {
                         Sweep::Line(end) => {
-                            for k in 0..2 {
-                                d.ctrl_mut()[self.actuators[k]] = way(xy[k], end[k]);
+                            for (k, p) in planned.iter_mut().enumerate() {
+                                *p = way(xy[k], end[k]);
+                                d.ctrl_mut()[self.actuators[k]] = *p + follow(z, k);
                             }
                         }
                         Sweep::Turn(end) => {
@@ -367,13 +399,18 @@ impl World for Sim {
         Ok(())
     }
 
-    /// The wrist's hinges take the rotation's Euler angles (R = Rz Ry Rx); an angle
-    /// above 1e-12 rad about an axis the scene has no hinge for is refused.
+    /// The wrist's hinges take the rotation's Euler angles (R = Rz Ry Rx); an angle about
+    /// an axis the scene has no hinge for is dropped up to [`UNHINGED`], refused beyond.
     fn set_tcp_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
         let (rx, ry, rz) = Rotation3::from_scaled_axis(Vector3::from(rot)).euler_angles();
-        let angles = [rx, ry, rz];
+        let mut angles = [rx, ry, rz];
+        for (k, a) in angles.iter_mut().enumerate() {
+            if self.wrist.iter().all(|h| h.axis != k) && a.abs() <= UNHINGED {
+                *a = 0.0;
+            }
+        }
         if let Some(axis) =
-            (0..3).find(|&k| angles[k].abs() > 1e-12 && self.wrist.iter().all(|h| h.axis != k))
+            (0..3).find(|&k| angles[k] != 0.0 && self.wrist.iter().all(|h| h.axis != k))
         {
             return Err(HarnessError::Invalid {
                 what: "TCP rotation",

@@ -1,6 +1,7 @@
-//! Rotations in the work cell (task octagon_yaw): the wrist's hinge and part B's turn
-//! compose as the map's relative pose says, the octagon's symmetry holds in MuJoCo, and a
-//! turned part reads the wrench its map computed from CAD predicts.
+//! Rotations in the work cell (task octagon_yaw, and a tilted hole): the wrist's hinge and
+//! part B's turn compose as the map's relative pose says, the octagon's symmetry holds in
+//! MuJoCo, a turned part reads the wrench its map computed from CAD predicts, and a peg
+//! tilted like a tilted hole goes in along its own axis where an upright one jams.
 
 mod common;
 
@@ -10,8 +11,8 @@ use harness::sensor::{Noise, map_wrench};
 use harness::trial::{Strategy, TrialConfig, Truth, Twist};
 use harness::world::World;
 
-/// The octagon_yaw map computed from its CAD meshes, cached like a campaign's.
-fn yaw_map(task: &ftmap::Task) -> std::path::PathBuf {
+/// A task's map computed from its CAD meshes, cached like a campaign's.
+fn cached_map(task: &ftmap::Task) -> std::path::PathBuf {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
     ftmap::generate::cached(task, &dir)
         .expect("the map computed from CAD")
@@ -77,7 +78,7 @@ fn an_eighth_of_a_turn_leaves_the_octagon_s_contact_as_it_was() {
 #[test]
 fn a_turned_octagon_reads_the_torque_its_map_predicts() {
     let (task, mut sim) = common::scene("octagon_yaw");
-    let (map, _) = ftmap::map::format::load_any(&yaw_map(&task)).expect("the map loads");
+    let (map, _) = ftmap::map::format::load_any(&cached_map(&task)).expect("the map loads");
     // Rim contacts with part B turned (the TCP unturned): the map at (x, y, yaw).
     for (d, yaw) in [
         ([0.002, 0.0], 7.0),
@@ -100,7 +101,7 @@ fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
     // x, y and the yaw over its whole period, force only, twists under force once x, y are
     // within the capture (100 trials: docs/RESULTS.md).
     let (task, mut sim) = common::scene("octagon_yaw");
-    let map = yaw_map(&task);
+    let map = cached_map(&task);
     let (m, _) = ftmap::map::format::load_any(&map).expect("the map loads");
     let grid = task.grid().expect("its grid");
     let play = m.rotational_play(2);
@@ -154,4 +155,20 @@ fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
         // In at a yaw within the fit's play, modulo the eighth of a turn.
         assert!(r.final_rot_error[2].abs() < 0.7f64.to_radians(), "{r:?}");
     }
+}
+
+#[test]
+fn a_peg_tilted_like_a_tilted_hole_goes_in_along_its_axis_and_an_upright_one_does_not() {
+    // 0.1 mm diametral clearance over 10 mm: about 0.57 degrees of play.
+    let (_, mut sim) = common::tilted();
+    let tilt = [2f64.to_radians(), -1.5f64.to_radians(), 0.0];
+    sim.set_object([0.0, 0.0]);
+    sim.set_object_rotation(tilt).expect("part B tilts");
+    sim.set_tcp_rotation(tilt).expect("the wrist tilts");
+    let matched = sim.contact_motion([0.0, 0.0]);
+    assert!(matched.inserted, "tilted like the hole: {matched:?}");
+    sim.set_tcp_rotation([0.0; 3])
+        .expect("the wrist straightens");
+    let upright = sim.contact_motion([0.0, 0.0]);
+    assert!(upright.settled && !upright.inserted, "upright: {upright:?}");
 }

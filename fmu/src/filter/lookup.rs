@@ -304,8 +304,9 @@ impl Lookup {
 
     /// Writes each particle's map coordinates (grid units, axis-major like `pos`, folded
     /// into the axes) for the TCP pose `tcp` into `out`: the object's pose relative to the
-    /// TCP's, T_tcp^-1 T_object (grip DOFs as they are). Without a TCP rotation that is the
-    /// particle's object pose minus the TCP's; with one, the poses are composed exactly.
+    /// TCP's, T_tcp^-1 T_object (grip DOFs and `object.z`, the approach, as they are).
+    /// Without a TCP rotation that is the particle's object pose minus the TCP's; with one,
+    /// the poses are composed exactly, the TCP at its contact height.
     pub fn relative(&self, pos: &[f32], tcp: &[f64; 6], out: &mut [f32]) {
         let n = pos.len() / self.ndim().max(1);
         if tcp[3..].iter().all(|r| *r == 0.0) {
@@ -322,8 +323,10 @@ impl Lookup {
         }
         use nalgebra::{Rotation3, Vector3};
         let r_tcp = Rotation3::new(Vector3::new(tcp[3], tcp[4], tcp[5])).inverse();
-        // The TCP's z is the contact height, not a displacement (as without a rotation).
-        let t_tcp = Vector3::new(tcp[0], tcp[1], 0.0);
+        // The TCP's z is the contact height: along a tilted tool axis it moves the TCP's x,
+        // y too, which the map's x, y (across the tool's axis) do not see; the relative z
+        // (along it) is what the depth channel reads.
+        let t_tcp = Vector3::new(tcp[0], tcp[1], tcp[2]);
         for i in 0..n {
             let mut pose = [0.0f64; 6];
             for (k, a) in self.axes.iter().enumerate() {
@@ -334,7 +337,7 @@ impl Lookup {
             let t = r_tcp * (Vector3::new(pose[0], pose[1], pose[2]) - t_tcp);
             let r = (r_tcp * Rotation3::new(Vector3::new(pose[3], pose[4], pose[5]))).scaled_axis();
             for (k, a) in self.axes.iter().enumerate() {
-                out[k * n + i] = if a.dof.pose == Pose::Object {
+                out[k * n + i] = if a.dof.pose == Pose::Object && a.dof.axis != Axis::Z {
                     let c = a.dof.axis.index();
                     let v = if c < 3 { t[c] } else { r[c - 3] };
                     // A rotation read on its periodic axis: the nearest turn of the period.

@@ -245,3 +245,35 @@ fn the_filter_recovers_a_known_yaw_across_the_seam() {
         );
     }
 }
+
+#[test]
+fn a_tilted_tcp_reads_the_same_offset_anywhere_along_its_axis() {
+    // The map's x, y lie across the tool's axis: a TCP further along that axis (at its
+    // contact height) reads the same x, y; one moved across it does not.
+    let mut f = filter(2);
+    place(&mut f, 0, [3e-4, -2e-4, 0.1]);
+    place(&mut f, 1, [-5e-4, 1e-4, -0.2]);
+    let (rx, ry) = (0.03, -0.02);
+    let axis =
+        nalgebra::Rotation3::new(nalgebra::Vector3::new(rx, ry, 0.0)) * nalgebra::Vector3::z();
+    let z = 0.01;
+    let at = |tcp: [f64; 6]| {
+        let mut rel = vec![0.0; 6];
+        f.lookup.relative(&f.pos, &tcp, &mut rel);
+        rel
+    };
+    let low = at([1e-4, 2e-4, 0.0, rx, ry, 0.0]);
+    let along = at([
+        1e-4 + z * axis.x / axis.z,
+        2e-4 + z * axis.y / axis.z,
+        z,
+        rx,
+        ry,
+        0.0,
+    ]);
+    let across = at([1e-4 + 1e-4, 2e-4, z, rx, ry, 0.0]);
+    for k in 0..4 {
+        assert!((low[k] - along[k]).abs() < 1e-4, "{low:?} {along:?}");
+    }
+    assert!((low[0] - across[0]).abs() > 0.5, "{low:?} {across:?}");
+}

@@ -59,6 +59,34 @@ pub fn chamfered(name: &str, peg: f64, hole: f64) -> (Task, Sim) {
     (task, sim)
 }
 
+/// peg_in_hole with the hole's tilts uncertain too (object rx, ry within ±2 degrees at
+/// 0.5), written to a scratch folder with its meshes and scene (a wrist with rx, ry
+/// hinges), and a simulation of that scene.
+pub fn tilted() -> (Task, Sim) {
+    let committed = Task::find("peg_in_hole").expect("a committed task");
+    let text = std::fs::read_to_string(&committed.path).expect("its task file");
+    let dir = std::env::temp_dir().join(format!("tilted-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a scratch folder");
+    let path = dir.join("task.toml");
+    let tilted = text
+        .replace("name = \"peg_in_hole\"", "name = \"peg_in_hole_tilted\"")
+        .replace(
+            "object = [\"x\", \"y\"]",
+            "object = [\"x\", \"y\", \"rx\", \"ry\"]",
+        )
+        .replace("size_rot = 0.0", "size_rot = 0.03490658503988659");
+    assert!(
+        tilted.contains("\"rx\"") && tilted.contains("0.0349"),
+        "the edits took"
+    );
+    std::fs::write(&path, tilted).expect("the tilted task file");
+    let task = Task::load(&path).expect("the tilted task");
+    task.write_meshes().expect("its meshes");
+    harness::sim::regenerate_scene(&task).expect("its scene");
+    let sim = Sim::of_task(&task).expect("its scene loads");
+    (task, sim)
+}
+
 /// The peg_in_hole map computed from the CAD meshes (centroid model, CPU backend).
 pub fn computed_peg_map() -> &'static FtMap {
     static MAP: OnceLock<FtMap> = OnceLock::new();
