@@ -56,7 +56,7 @@ pub struct Summary {
     pub final_error_mean: f64,
     /// Largest such distance (m).
     pub final_error_max: f64,
-    /// The last approach's error per uncertain object DOF.
+    /// The last approach's error per uncertain DOF (the last grip estimate's on the grip).
     pub final_errors: Vec<DofError>,
     /// Trials per wall-clock second.
     pub trials_per_second: f64,
@@ -153,7 +153,7 @@ impl RotationSummary {
     }
 }
 
-/// The last approach's error on one uncertain DOF of the object, over a campaign's trials.
+/// The last approach's error on one uncertain DOF, over a campaign's trials.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct DofError {
     /// The DOF (`object.x`, `object.rz`, ...).
@@ -164,32 +164,41 @@ pub struct DofError {
     pub max: f64,
 }
 
-/// The last approach's error per uncertain object DOF of `task` over `results`: the TCP
-/// against the true offset on x, y; [`TrialResult::final_rot_error`] on rotations.
+/// The last approach's error per uncertain DOF of `task` over `results`: the TCP against
+/// the true offset on object x, y; [`TrialResult::final_rot_error`] on object rotations;
+/// the last grip estimate against the true grip on grip x, y.
 fn final_errors(task: &Task, results: &[TrialResult]) -> Vec<DofError> {
     let dofs = task.dofs().unwrap_or_default();
+    let error = |d: &ftmap::Dof, r: &TrialResult| -> Option<f64> {
+        let k = d.axis.index();
+        match (d.pose, d.axis) {
+            (Pose::Object, Axis::X | Axis::Y) => Some(
+                r.steps
+                    .last()
+                    .map_or(r.offset[k], |s| s.tcp[k] - r.offset[k]),
+            ),
+            (Pose::Object, Axis::Rx | Axis::Ry | Axis::Rz) => Some(r.final_rot_error[k - 3]),
+            (Pose::Grip, Axis::X | Axis::Y) => Some(
+                r.steps
+                    .iter()
+                    .rev()
+                    .find_map(|s| s.estimate)
+                    .map_or(r.grip[k], |e| e.grip[k] - r.grip[k]),
+            ),
+            _ => None,
+        }
+    };
     dofs.iter()
-        .filter(|d| d.pose == Pose::Object && d.axis != Axis::Z)
-        .map(|d| {
-            let k = d.axis.index();
+        .filter_map(|d| {
             let errors: Vec<f64> = results
                 .iter()
-                .map(|r| {
-                    if k < 2 {
-                        r.steps
-                            .last()
-                            .map_or(r.offset[k], |s| s.tcp[k] - r.offset[k])
-                            .abs()
-                    } else {
-                        r.final_rot_error[k - 3].abs()
-                    }
-                })
-                .collect();
-            DofError {
+                .map(|r| error(d, r).map(f64::abs))
+                .collect::<Option<_>>()?;
+            Some(DofError {
                 dof: d.to_string(),
                 mean: errors.iter().sum::<f64>() / errors.len().max(1) as f64,
                 max: errors.iter().copied().fold(0.0, f64::max),
-            }
+            })
         })
         .collect()
 }
