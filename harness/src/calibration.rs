@@ -106,6 +106,27 @@ pub fn samples(results: &[TrialResult]) -> Vec<Sample> {
         .collect()
 }
 
+/// The estimate after each trial's first image (taken before any contact, with a camera)
+/// against the truth, as measurement 0.
+pub fn first_images(results: &[TrialResult]) -> Vec<Sample> {
+    results
+        .iter()
+        .enumerate()
+        .filter_map(|(trial, r)| {
+            r.first_look.map(|estimate| Sample {
+                trial,
+                measurement: 0,
+                image: true,
+                truth: r.offset,
+                grip_truth: r.grip,
+                rot_truth: r.rot,
+                rot_error: rotation_error(estimate.rot, r.rot, r.symmetry),
+                estimate,
+            })
+        })
+        .collect()
+}
+
 /// The calibration of one DOF's spread.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct DofCalibration {

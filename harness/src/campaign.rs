@@ -416,9 +416,7 @@ impl Campaign {
             }
         }
     }
-}
 
-impl Campaign {
     /// `particles.png` of the first trial from its trace (`trace.csv`), where it made a
     /// measurement.
     ///

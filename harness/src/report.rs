@@ -48,6 +48,9 @@ pub struct Summary {
     /// Whether the reported spreads are calibrated, over every contact measurement; `None`
     /// without the estimator.
     pub calibration: Option<Calibration>,
+    /// The same over the estimates after each trial's first image, before any contact
+    /// (with a camera; `None` without).
+    pub first_image_calibration: Option<Calibration>,
     /// Whether a camera took part (experiment D).
     pub vision: bool,
     /// Images in which not all four edges were found (all trials).
@@ -295,6 +298,9 @@ pub fn summarize(
         calibration: Some(&samples)
             .filter(|s| !s.is_empty())
             .map(|s| Calibration::of(s)),
+        first_image_calibration: Some(calibration::first_images(results))
+            .filter(|s| !s.is_empty())
+            .map(|s| Calibration::of(&s)),
         vision,
         images_missed: results.iter().map(|r| r.images_missed).sum(),
         final_error_mean: results.iter().map(|r| r.final_error).sum::<f64>() / n,
@@ -387,6 +393,12 @@ impl Summary {
                 self.calibration
                     .as_ref()
                     .map_or("n/a (no estimator)".to_owned(), Calibration::line),
+            ),
+            (
+                "first image: true offset within 1 / 2 sigma",
+                self.first_image_calibration
+                    .as_ref()
+                    .map_or("n/a (no camera)".to_owned(), Calibration::line),
             ),
             (
                 "final error mean / max",

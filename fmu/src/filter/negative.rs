@@ -15,8 +15,9 @@
 //! through its centre inserted along them). With a rotation error part A goes in within
 //! less than the clearance, so the term rules out only the particles inside the diamond
 //! |offset| / clearance + sum |rotation error| / play < 1, a region the fit's insertion
-//! set holds when that set is convex (the octagon's and a tilted peg's are). Grip
-//! rotations, and object rotations without play, leave no such region: no term then.
+//! set holds when that set is convex (to first order the octagon's is: the room its
+//! corners leave shrinks linearly with the yaw). Grip rotations, and object rotations
+//! without play, leave no such region: no term then.
 
 use ftmap::{Axis, Pose};
 
