@@ -2,10 +2,12 @@
 //! source of truth for the map, the FMU and the simulated work cell.
 //!
 //! World frame = the nominal goal frame. Part B (fixed) sits on a mocap body `part_b`
-//! whose position is the true object offset of a trial. Part A hangs under a carriage
-//! with slide joints `x`, `y`, `z` (the task frame's position relative to the nominal goal,
-//! i.e. the TCP): stiff position servos across the approach, a motor along it pressing
-//! with the task's imposed force against a velocity servo, the feed (see `sim`); gravity is
+//! whose pose is the true object offset (and rotation) of a trial. Part A hangs under a
+//! carriage with slide joints `x`, `y`, `z` (the task frame's position relative to the
+//! nominal goal, i.e. the TCP): stiff position servos across the approach, a motor along
+//! it pressing with the task's imposed force against a velocity servo, the feed (see
+//! `sim`); between them a body `wrist` with a hinge (`rz`, `ry`, `rx`, position servos
+//! `servo_r*`) for each uncertain object rotation of the task, none otherwise; gravity is
 //! off so that the settled contact force is the imposed force. The F/T sensor (`ft_force`,
 //! `ft_torque`) sits on site `ft` of body `part_a`, at the task's sensor origin.
 //!

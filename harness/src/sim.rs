@@ -7,7 +7,9 @@
 //! pushes with the imposed force against the feed's damping, a slow guarded approach. When
 //! part A has dropped into part B by [`ENTRY_DEPTH`], the feed drives it down at
 //! [`INSERTION_SPEED`], slowing down over the last [`INSERTION_TIME`] (its speed the height
-//! left over that time), until it settles on the goal under the imposed force. So each
+//! left over that time), until it settles on the goal under the imposed force (a tilted
+//! part A feeds along its own axis: the carriage's x, y follow its height). A slide moves,
+//! and a twist turns the wrist, under force once the press has settled. So each
 //! contact is a pure function of the object offset and the commanded point (the FMPy
 //! script reproduces it step for step).
 //!
