@@ -47,6 +47,26 @@ pub struct Sample {
 }
 
 impl Sample {
+    /// Measurement `measurement` of trial `trial` (result `r`) that gave `estimate`.
+    fn of(
+        trial: usize,
+        measurement: usize,
+        image: bool,
+        r: &TrialResult,
+        estimate: Estimate,
+    ) -> Self {
+        Self {
+            trial,
+            measurement,
+            image,
+            truth: r.offset,
+            grip_truth: r.grip,
+            rot_truth: r.rot,
+            rot_error: rotation_error(estimate.rot, r.rot, r.symmetry),
+            estimate,
+        }
+    }
+
     /// Error of the estimate in units of the reported spread, per DOF.
     pub fn z(&self) -> [f64; 2] {
         std::array::from_fn(|k| {
@@ -92,16 +112,7 @@ pub fn samples(results: &[TrialResult]) -> Vec<Sample> {
                 .iter()
                 .filter_map(|s| s.estimate.map(|e| (s.image, e)))
                 .enumerate()
-                .map(move |(k, (image, estimate))| Sample {
-                    trial,
-                    measurement: k + 1,
-                    image,
-                    truth: r.offset,
-                    grip_truth: r.grip,
-                    rot_truth: r.rot,
-                    rot_error: rotation_error(estimate.rot, r.rot, r.symmetry),
-                    estimate,
-                })
+                .map(move |(k, (image, estimate))| Sample::of(trial, k + 1, image, r, estimate))
         })
         .collect()
 }
@@ -113,16 +124,8 @@ pub fn first_images(results: &[TrialResult]) -> Vec<Sample> {
         .iter()
         .enumerate()
         .filter_map(|(trial, r)| {
-            r.first_look.map(|estimate| Sample {
-                trial,
-                measurement: 0,
-                image: true,
-                truth: r.offset,
-                grip_truth: r.grip,
-                rot_truth: r.rot,
-                rot_error: rotation_error(estimate.rot, r.rot, r.symmetry),
-                estimate,
-            })
+            r.first_look
+                .map(|estimate| Sample::of(trial, 0, true, r, estimate))
         })
         .collect()
 }

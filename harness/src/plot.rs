@@ -10,7 +10,7 @@ use plotters::prelude::*;
 
 use crate::error::{HarnessError, Result, create_parent};
 use crate::fmu_driver::Estimate;
-use crate::report::TrialRow;
+use crate::report::{self, TrialRow};
 use crate::trial::TrialResult;
 use model_description::trace::TraceMeasurement;
 
@@ -175,13 +175,9 @@ pub fn particles(path: &Path, measurements: &[TraceMeasurement], truth: &[f64]) 
     wrap(path, draw_particles(path, measurements, truth))
 }
 
-/// A DOF's value as plotted: mm or degrees.
+/// A DOF's value as plotted: mm or degrees ([`report::shown`]).
 fn shown(dof: &str, v: f64) -> f64 {
-    if dof.contains(".r") {
-        v.to_degrees()
-    } else {
-        v * 1e3
-    }
+    report::shown(dof, v).0
 }
 
 fn draw_particles(path: &Path, measurements: &[TraceMeasurement], truth: &[f64]) -> Draw {
@@ -231,7 +227,7 @@ fn draw_particles(path: &Path, measurements: &[TraceMeasurement], truth: &[f64])
                 .x_label_area_size(40)
                 .y_label_area_size(55)
                 .build_cartesian_2d(range(a, na), range(b, nb))?;
-            let unit = |n: &str| if n.contains(".r") { "deg" } else { "mm" };
+            let unit = |n: &str| report::shown(n, 0.0).1;
             chart
                 .configure_mesh()
                 .x_desc(format!("{na} [{}]", unit(na)))

@@ -156,6 +156,16 @@ impl RotationSummary {
     }
 }
 
+/// A value (m or rad) of the DOF named `dof` as a person reads it: degrees on a rotation,
+/// mm otherwise, with its unit.
+pub fn shown(dof: &str, v: f64) -> (f64, &'static str) {
+    if dof.parse::<ftmap::Dof>().is_ok_and(|d| d.is_rotation()) {
+        (v.to_degrees(), "deg")
+    } else {
+        (v * 1e3, "mm")
+    }
+}
+
 /// The last approach's error on one uncertain DOF, over a campaign's trials.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct DofError {
@@ -207,23 +217,11 @@ fn final_errors(task: &Task, results: &[TrialResult]) -> Vec<DofError> {
 }
 
 impl DofError {
-    /// `object.x 0.012 / 0.030 mm` (degrees on a rotation).
+    /// `object.x 0.0120 / 0.0300 mm` (degrees on a rotation).
     pub fn text(&self) -> String {
-        if self.dof.contains(".r") {
-            format!(
-                "{} {:.3} / {:.3} deg",
-                self.dof,
-                self.mean.to_degrees(),
-                self.max.to_degrees()
-            )
-        } else {
-            format!(
-                "{} {:.4} / {:.4} mm",
-                self.dof,
-                self.mean * 1e3,
-                self.max * 1e3
-            )
-        }
+        let ((mean, unit), (max, _)) = (shown(&self.dof, self.mean), shown(&self.dof, self.max));
+        let digits = if unit == "deg" { 3 } else { 4 };
+        format!("{} {mean:.digits$} / {max:.digits$} {unit}", self.dof)
     }
 }
 

@@ -447,8 +447,7 @@ impl World for Sim {
     /// The twist turns at [`TWIST_SPEED`] and, like a slide, stops where part A drops by
     /// [`DROP_DEPTH`]; one that found no hole ends with a fresh press where it stopped.
     fn twist_motion(&mut self, xy: [f64; 2], from: f64, to: f64) -> Result<Contact> {
-        // Refused where the scene has no hinge about z.
-        self.set_tcp_rotation([0.0, 0.0, from])?;
+        // Either end refused where the scene has no hinge about z; the wrist starts at `from`.
         self.set_tcp_rotation([0.0, 0.0, to])?;
         self.set_tcp_rotation([0.0, 0.0, from])?;
         let twisted = self.motion(xy, Some(Sweep::Turn(to)));

@@ -463,10 +463,10 @@ impl Filter {
 
     /// Gaussian jitter on every axis, clamped into Omega (wrapped on a periodic axis):
     /// `jitter` grid intervals, or less once the particles' spread is small, so that the
-    /// jitter of a measurement's
-    /// iterations together moves a particle by about [`JITTER_SPREAD`] of the spread: a
-    /// fixed jitter would blur a posterior narrower than it (the last tens of micrometres
-    /// of a fit) and with it what the earlier contacts said. It never falls below that
+    /// jitter of a measurement's iterations together moves a particle by about
+    /// [`JITTER_SPREAD`] of the spread: a fixed jitter would blur a posterior narrower than
+    /// it (the last tens of micrometres of a fit) and with it what the earlier contacts
+    /// said. It never falls below that
     /// share of the fit's clearance on the object's translations (of one grid interval on
     /// other axes, the grip's included, and where the map has no clearance), so that a set
     /// that has collapsed off the truth can still move.

@@ -168,12 +168,12 @@ impl FtMap {
         let Some(a) = self.grid.axes().get(k) else {
             return 0.0;
         };
-        let Some(middle) = self.contact_depth() else {
-            return 0.0;
-        };
         if !(a.dof.pose == crate::Pose::Object && a.dof.is_rotation()) {
             return 0.0;
         }
+        let Some(middle) = self.contact_depth() else {
+            return 0.0;
+        };
         let mut idx = [0usize; crate::task::omega::MAX_AXES];
         for (j, b) in self.grid.axes().iter().enumerate() {
             idx[j] = b.nearest(0.0);
