@@ -351,7 +351,9 @@ impl Campaign {
         })
     }
 
-    /// Writes `<out>/trials.csv` and `<out>/summary.json`; returns the summary.
+    /// Writes `<out>/trials.csv`, `measurements.csv`, `first_images.csv` (with a camera: the
+    /// estimate after each trial's first image, as measurement 0) and `summary.json`; returns
+    /// the summary.
     ///
     /// # Errors
     /// When the folder or a file cannot be written.
@@ -363,6 +365,10 @@ impl Campaign {
             &out.join("measurements.csv"),
             &calibration::samples(&outcome.results),
         )?;
+        let first = calibration::first_images(&outcome.results);
+        if !first.is_empty() {
+            report::write_measurements_csv(&out.join("first_images.csv"), &first)?;
+        }
         let summary = report::summarize(
             &self.task,
             &self.options.world,
