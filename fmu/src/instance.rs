@@ -14,8 +14,9 @@ use crate::trace::Trace;
 
 /// First bytes of a saved FMU state.
 pub const STATE_MAGIC: [u8; 8] = *b"FTFSTATE";
-/// Version of the saved-state layout (2: the `vision.valid` edge).
-pub const STATE_VERSION: u32 = 2;
+/// Version of the saved-state layout (2: the `vision.valid` edge; 3: the filter's evidence
+/// that its particles are lost).
+pub const STATE_VERSION: u32 = 3;
 
 /// FMI 2.0 status of a call.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -646,6 +647,18 @@ impl Instance {
                             "t = {}: no particle explains the measurement (every likelihood underflowed): \
                              re-spread half of the particles uniformly ({} of the iterations)",
                             self.time, report.respread
+                        ),
+                    );
+                }
+                if report.relocated > 0 {
+                    self.log(
+                        Status::Ok,
+                        "logFilter",
+                        &format!(
+                            "t = {}: the particles explain the measurement far worse than a \
+                             draw over Omega does (more likely lost than not, parameter lost): \
+                             redrew {} of them uniformly",
+                            self.time, report.relocated
                         ),
                     );
                 }

@@ -209,6 +209,7 @@ impl Params {
             clearance: checked(store, "clearance")?,
             mismatch: checked(store, "mismatch")?,
             mismatch_angle: checked(store, "mismatch_angle")?,
+            lost: checked(store, "lost")?,
         };
         let map = store.string(index_of("map")).to_owned();
         if map.trim().is_empty() {

@@ -120,6 +120,8 @@ pub struct CampaignOptions {
     pub mismatch: Option<f64>,
     /// FMU parameter `mismatch_angle` (rad).
     pub mismatch_angle: Option<f64>,
+    /// FMU parameter `lost`.
+    pub lost: Option<f64>,
     /// Where the contact motions happen.
     pub world: WorldKind,
 }
@@ -586,6 +588,7 @@ fn trial_config(
             sigma_depth: options.sigma_depth,
             mismatch: options.mismatch,
             mismatch_angle: options.mismatch_angle,
+            lost: options.lost,
             sigma_vision: options.sigma_vision,
             vision_method: Some(options.vision_method.parameter()),
             trace: match (options.strategy, &options.offsets) {

@@ -410,6 +410,18 @@ pub const VARIABLES: &[Variable] = &[
          weight) and the estimate, CSV (docs/fmu.md, Trace files); created if missing; empty: \
          none",
     ),
+    param(
+        "lost",
+        116,
+        Real,
+        Start::Real(1e-9),
+        "",
+        [Some(0.0), Some(0.5)],
+        "Prior probability that the particles have lost the truth (locked on a wrong \
+         hypothesis): where the measurements since they last explained one better than a \
+         uniform draw over Omega does make that more likely than not, half the particles are \
+         redrawn uniformly over Omega; 0: never",
+    ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
         "vision",

@@ -40,8 +40,14 @@ const UNDERFLOW: f32 = -87.33655;
 /// The jitter of one measurement's iterations together moves a particle by at most this
 /// share of the particles' spread (standard deviations).
 const JITTER_SPREAD: f64 = 0.5;
-/// Share of the particles re-spread uniformly when every likelihood underflows.
+/// Share of the particles re-spread uniformly when every likelihood underflows, and the
+/// most that a relocation redraws.
 const RESPREAD_SHARE: f64 = 0.5;
+/// One particle in this many is a probe of the relocation test: drawn afresh from the prior
+/// to judge whether the prior explains a measurement better than the particle set does.
+const PROBE_EVERY: usize = 20;
+/// Mixed into the seed for the relocation probes' random stream (the golden ratio's bits).
+const PROBE_STREAM: u64 = 0x9E37_79B9_7F4A_7C15;
 
 /// The largest magnitude of a measured value (N, N.m, m, rad, px): beyond it an input is
 /// a broken signal, not a measurement (and its square would overflow the likelihood).
@@ -82,6 +88,11 @@ pub struct Config {
     /// Angle by which the map may miss the measured force's and torque's directions (rad):
     /// across the measured vector, that angle times its magnitude is added in quadrature.
     pub mismatch_angle: f64,
+    /// Prior probability that the particle set has lost the truth (e.g. locked on a wrong
+    /// hypothesis by a contact the map did not explain): where the measurements since the
+    /// set last explained one better than the prior make that more likely than not, half the
+    /// particles are redrawn from the prior; 0: never.
+    pub lost: f64,
 }
 
 impl Default for Config {
@@ -101,6 +112,7 @@ impl Default for Config {
             clearance: 0.0,
             mismatch: 0.03,
             mismatch_angle: 0.03,
+            lost: 1e-9,
         }
     }
 }
@@ -129,6 +141,9 @@ pub struct Report {
     pub respread: u32,
     /// Iterations that resampled (ESS <= N/2).
     pub resampled: u32,
+    /// Particles redrawn from the prior because the set explained the measurement far worse
+    /// than the prior does (relocation).
+    pub relocated: u32,
     /// The image was not used: no vision model, or no camera recalibration fits it.
     pub vision_unused: bool,
 }
@@ -146,6 +161,9 @@ pub struct Filter {
     lw: Vec<f32>,
     rng: Xoshiro256PlusPlus,
     measurements: u32,
+    /// Page's CUSUM of ln(E_prior / E_set) over the measurements since the set last explained
+    /// one better than the prior (nats): the evidence that the particles have lost the truth.
+    lost_evidence: f64,
     estimate: Estimate,
     scratch: Scratch,
 }
@@ -159,6 +177,8 @@ struct Scratch {
     /// The particles' map coordinates relative to the TCP.
     rel: Vec<f32>,
     pick: Vec<u32>,
+    /// The relocation probes' own poses, axis-major, while they stand for the prior.
+    kept: Vec<f32>,
 }
 
 impl Filter {
@@ -187,6 +207,7 @@ impl Filter {
             lw: vec![-(n as f32).ln(); n],
             rng: Xoshiro256PlusPlus::seed_from_u64(cfg.seed),
             measurements: 0,
+            lost_evidence: 0.0,
             estimate: Estimate::default(),
             scratch: Scratch {
                 ll: vec![0.0; n],
@@ -194,6 +215,7 @@ impl Filter {
                 pos: vec![0.0; n * d],
                 rel: vec![0.0; n * d],
                 pick: vec![0; n],
+                kept: vec![0.0; n.div_ceil(PROBE_EVERY) * d],
             },
         };
         for i in 0..n {
@@ -251,10 +273,15 @@ impl Filter {
 
     /// Moves particle `i` to a uniform random place in Omega.
     fn spread(&mut self, i: usize) {
-        let n = self.cfg.particles;
-        for (k, a) in self.lookup.axes().iter().enumerate() {
-            let u: f32 = unit(&mut self.rng);
-            self.pos[k * n + i] = u * a.top();
+        Self::spread_with(&mut self.rng, &self.lookup, &mut self.pos, i);
+    }
+
+    /// Moves particle `i` of `pos` to a place in Omega drawn uniformly from `rng`.
+    fn spread_with(rng: &mut Xoshiro256PlusPlus, lookup: &Lookup, pos: &mut [f32], i: usize) {
+        let n = pos.len() / lookup.ndim().max(1);
+        for (k, a) in lookup.axes().iter().enumerate() {
+            let u: f32 = unit(rng);
+            pos[k * n + i] = u * a.top();
         }
     }
 
@@ -362,6 +389,9 @@ impl Filter {
             force: !m.vision_only,
             vision,
         };
+        if self.measurements > 0 && c.lost > 0.0 {
+            report.relocated = self.relocate(&evidence);
+        }
         for it in 0..self.cfg.iterations {
             // Condensation order: predict (jitter) before each weighing but the very first,
             // so that the estimate below reads the weighed set (Algorithm 1, step 13), not
@@ -407,6 +437,71 @@ impl Filter {
             let axes = self.lookup.axes();
             sense.add_log_likelihood(p, n, |k, i| axes[k].value(self.pos[k * n + i]), ll);
         }
+    }
+
+    /// Relocation (sensor resetting, decided by Bayes): the prior for a measurement is
+    /// `(1 - lost)` the particle set plus `lost` the prior over Omega. One particle in
+    /// [`PROBE_EVERY`] is drawn afresh from the prior; the measurement's mean likelihood
+    /// under these probes and under the rest of the set (with its weights) give the Bayes
+    /// factor of "lost", accumulated over consecutive measurements (Page's CUSUM). Where
+    /// the set is then more likely lost than not, [`RESPREAD_SHARE`] of the particles are
+    /// redrawn from the prior with a particle's mean weight, the rest kept as they were;
+    /// the probes go back where they were either way. Returns how many were redrawn. One
+    /// contact the map does not explain (an outlier) is followed by one the set explains
+    /// again, which clears the evidence; a set locked on a wrong hypothesis is not.
+    fn relocate(&mut self, ev: &Evidence) -> u32 {
+        let (n, d) = (self.cfg.particles, self.lookup.ndim());
+        // The probes come from a stream of their own (the seed and the measurement's
+        // number), so that a set that is not lost goes on exactly as without them.
+        let mut probe_rng = Xoshiro256PlusPlus::seed_from_u64(
+            self.cfg.seed ^ PROBE_STREAM.wrapping_mul(u64::from(self.measurements) + 1),
+        );
+        let offset = (probe_rng.next_u64() % PROBE_EVERY as u64) as usize;
+        let probes: Vec<usize> = (offset..n).step_by(PROBE_EVERY).collect();
+        for (j, &i) in probes.iter().enumerate() {
+            for k in 0..d {
+                self.scratch.kept[j * d + k] = self.pos[k * n + i];
+            }
+            Self::spread_with(&mut probe_rng, &self.lookup, &mut self.pos, i);
+        }
+        let mut ll = std::mem::take(&mut self.scratch.ll);
+        let mut rel = std::mem::take(&mut self.scratch.rel);
+        self.log_likelihood(ev, &mut rel, &mut ll);
+        let is_probe = |i: usize| i >= offset && (i - offset).is_multiple_of(PROBE_EVERY);
+        let set = log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i] + ll[i]))
+            - log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i]));
+        let prior = log_sum_exp(probes.iter().map(|&i| ll[i])) - (probes.len() as f64).ln();
+        self.scratch.ll = ll;
+        self.scratch.rel = rel;
+        for (j, &i) in probes.iter().enumerate() {
+            for k in 0..d {
+                self.pos[k * n + i] = self.scratch.kept[j * d + k];
+            }
+        }
+        // Page's CUSUM: the evidence accumulates while the prior explains the contacts better
+        // than the set and falls back to zero once the set explains one better. The set is
+        // more likely lost than not once lost / (1 - lost) times that evidence's Bayes factor
+        // passes 1. NaN (no finite likelihood anywhere) is left to the underflow re-spread
+        // of the weighing.
+        let evidence = self.lost_evidence + prior - set;
+        self.lost_evidence = if evidence.is_nan() {
+            0.0
+        } else {
+            evidence.max(0.0)
+        };
+        if self.lost_evidence < ((1.0 - self.cfg.lost) / self.cfg.lost).ln() {
+            return 0;
+        }
+        self.lost_evidence = 0.0;
+        let step = (1.0 / RESPREAD_SHARE).round() as usize;
+        let first = (self.rng.next_u64() % step as u64) as usize;
+        let mean = -(n as f32).ln();
+        for i in (first..n).step_by(step) {
+            self.spread(i);
+            self.lw[i] = mean;
+        }
+        normalise(&mut self.lw, &mut self.scratch.w);
+        (first..n).step_by(step).len() as u32
     }
 
     /// Multiplies the weights by the likelihood and normalises (log-sum-exp); re-spreads a
@@ -587,6 +682,16 @@ where
     rand_distr::StandardUniform: Distribution<T>,
 {
     rand_distr::StandardUniform.sample(rng)
+}
+
+/// ln sum exp of `values` (f64; -inf for none or all -inf).
+fn log_sum_exp(values: impl Iterator<Item = f32> + Clone) -> f64 {
+    let max = values.clone().fold(f32::NEG_INFINITY, f32::max);
+    if !max.is_finite() {
+        return f64::from(max);
+    }
+    let sum: f64 = values.map(|v| f64::from(v - max).exp()).sum();
+    f64::from(max) + sum.ln()
 }
 
 /// Shifts log weights so that their exponentials sum to 1 (log-sum-exp), writes the

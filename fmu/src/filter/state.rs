@@ -115,6 +115,7 @@ impl Filter {
         w.f32s(&self.pos);
         w.f32s(&self.lw);
         w.u32(self.measurements);
+        w.f64(self.lost_evidence);
         // Serializing four u64 into JSON cannot fail.
         w.bytes(
             serde_json::to_string(&self.rng)
@@ -149,6 +150,12 @@ impl Filter {
         r.f32s(&mut pos)?;
         r.f32s(&mut lw)?;
         let measurements = r.u32()?;
+        let lost_evidence = r.f64()?;
+        if !(lost_evidence.is_finite() && lost_evidence >= 0.0) {
+            return Err(FusionError::State(format!(
+                "the evidence that the particles are lost is {lost_evidence} nats, not finite and >= 0"
+            )));
+        }
         let rng: Xoshiro256PlusPlus = serde_json::from_slice(r.bytes()?)
             .map_err(|e| FusionError::State(format!("random generator state: {e}")))?;
         // Particles live on Omega's grid: coordinates in [0, top] (grid units) per axis.
@@ -176,6 +183,7 @@ impl Filter {
         self.pos = pos;
         self.lw = lw;
         self.measurements = measurements;
+        self.lost_evidence = lost_evidence;
         self.rng = rng;
         self.estimate = Estimate::compute(&self.lookup, &self.cfg, &self.pos, &self.lw);
         Ok(())

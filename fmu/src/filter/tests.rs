@@ -200,15 +200,17 @@ fn an_impossible_measurement_re_spreads_particles_and_never_gives_nan() {
         "{est:?}"
     );
     assert!(f.lw.iter().all(|l| l.is_finite()));
-    // Sound measurements afterwards find the pose again.
-    let mut respread = 0;
+    // Sound measurements afterwards find the pose again: the set the absurd torque moved
+    // explains them far worse than the prior does, so particles are drawn afresh (by
+    // relocation, or by the re-spread where every likelihood underflows).
+    let mut afresh = 0;
     for _ in 0..5 {
-        respread += f
+        let r = f
             .measure(&measurement(truth[0], truth[1], [0.0, 0.0], 1e-3, &mut rng))
-            .expect("finite")
-            .respread;
+            .expect("finite");
+        afresh += r.respread + r.relocated;
     }
-    assert!(respread > 0);
+    assert!(afresh > 0);
     assert!(error(&f, truth) < 2.0 * STEP, "{:?}", f.estimate());
 }
 
@@ -277,6 +279,69 @@ fn one_gross_outlier_keeps_the_truth_within_two_sigma_and_the_next_contact_recov
         kept_gaussian < kept,
         "Gaussian {kept_gaussian}, Student-t {kept}: {gaussian:?}"
     );
+}
+
+/// A filter locked on `wrong` by three contacts there, then fed contacts of `truth`, each
+/// at its last estimate, with `lost` as given: the contacts of `truth` it needed until its
+/// estimate was within two grid steps (None: not within 6), and the particles it redrew.
+fn unlock(seed: u64, lost: f64, wrong: [f64; 2], truth: [f64; 2]) -> (Option<usize>, u32) {
+    let mut f = filter(seed);
+    f.cfg.lost = lost;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed + 200);
+    for _ in 0..3 {
+        f.measure(&measurement(wrong[0], wrong[1], [0.0, 0.0], 1e-3, &mut rng))
+            .expect("finite");
+    }
+    assert!(error(&f, wrong) < 2.0 * STEP, "{:?}", f.estimate());
+    let mut redrawn = 0;
+    for k in 1..=6 {
+        let at = [f.estimate().pose[0], f.estimate().pose[1]];
+        redrawn += f
+            .measure(&measurement(truth[0], truth[1], at, 1e-3, &mut rng))
+            .expect("finite")
+            .relocated;
+        if error(&f, truth) < 2.0 * STEP {
+            return (Some(k), redrawn);
+        }
+    }
+    (None, redrawn)
+}
+
+#[test]
+fn a_set_locked_on_a_wrong_hypothesis_relocates_and_a_sound_one_does_not() {
+    // The part moved after three contacts (or the three were misread): the set holds a
+    // hypothesis 5 mm off with a spread of a grid step. Relocation redraws particles from
+    // the prior at the first contact that the set explains far worse than the prior does.
+    let cases = [
+        (1, [-3.0e-3, 2.0e-3], [2.5e-3, -1.5e-3]),
+        (2, [3.5e-3, 3.0e-3], [-1.0e-3, -2.5e-3]),
+        (3, [0.5e-3, -4.0e-3], [-2.0e-3, 3.5e-3]),
+    ];
+    for (seed, wrong, truth) in cases {
+        let (with, redrawn) = unlock(seed, Config::default().lost, wrong, truth);
+        let (without, none) = unlock(seed, 0.0, wrong, truth);
+        assert!(redrawn > 0 && none == 0, "{redrawn} {none}");
+        assert!(
+            with.is_some_and(|k| k <= 3),
+            "seed {seed}: {with:?} contacts with relocation, {without:?} without"
+        );
+        assert!(
+            without.is_none_or(|k| k > with.unwrap_or(0)),
+            "seed {seed}: {with:?} contacts with relocation, {without:?} without"
+        );
+    }
+    // Contacts the set explains redraw next to nothing: at most a share `lost` of the
+    // particles per contact (4 of 4000), where the set is as broad as the prior's reading.
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+    let mut f = filter(5);
+    let truth = [1.5e-3, 2.5e-3];
+    for _ in 0..5 {
+        let at = [f.estimate().pose[0], f.estimate().pose[1]];
+        let r = f
+            .measure(&measurement(truth[0], truth[1], at, 1e-3, &mut rng))
+            .expect("finite");
+        assert!(r.relocated <= 4, "{r:?}");
+    }
 }
 
 /// A world whose torques the map misses by `distort` (contact physics moving the edge
@@ -849,10 +914,12 @@ fn a_contact_resting_on_a_chamfer_says_how_far_off_it_is() {
 }
 
 #[test]
-fn a_tampered_state_with_unnormalised_or_infinite_weights_is_refused() {
+fn a_tampered_state_with_unnormalised_or_infinite_weights_or_evidence_is_refused() {
     let f = filter(21);
     type Tamper = fn(&mut Filter);
-    let cases: [(Tamper, &str); 5] = [
+    let cases: [(Tamper, &str); 7] = [
+        (|f| f.lost_evidence = f64::NAN, "lost is NaN nats"),
+        (|f| f.lost_evidence = -1.0, "lost is -1 nats"),
         (|f| f.lw[7] = f32::INFINITY, "log-weight is inf"),
         (|f| f.lw[7] = 3.0, "log-weight is 3"),
         (|f| f.lw.fill(f32::NEG_INFINITY), "no particle has weight"),

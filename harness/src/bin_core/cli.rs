@@ -251,6 +251,10 @@ pub struct RunArgs {
     /// FMU parameter `mismatch_angle` (rad: how far the map may miss their directions).
     #[arg(long)]
     pub mismatch_angle: Option<f64>,
+    /// FMU parameter `lost` (prior probability per measurement that the particles lost the
+    /// truth; 0: never redraw).
+    #[arg(long)]
+    pub lost: Option<f64>,
     /// Where the contact motions happen: the task's MuJoCo scene, or a world that is the
     /// FT-Map itself (the map's wrench at the true offset, part A going in where the
     /// geometry says).
@@ -358,6 +362,7 @@ impl RunArgs {
             sigma_depth: self.sigma_depth,
             mismatch: self.mismatch,
             mismatch_angle: self.mismatch_angle,
+            lost: self.lost,
             world: match self.world {
                 WorldArg::Mujoco => WorldKind::Mujoco,
                 WorldArg::Map => WorldKind::Map(self.world_map),
