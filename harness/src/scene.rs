@@ -90,11 +90,14 @@ pub const WRIST_JOINTS: [(&str, &str, usize); 3] = [
     ("rx", "servo_rx", 0),
 ];
 /// Stiffness of the wrist's position servos (N.m/rad): a rim's 0.25 N.m turns part A by
-/// 25 microradians.
-pub const SERVO_KP_ROT: f64 = 1.0e4;
+/// 25 nanoradians. A flat face resting on a rim spreads its load as the map's centroid
+/// model assumes only while the faces stay parallel within a fraction of a microradian: at
+/// 1e4 N.m/rad (6 microradians) the peg 2 mm off its hole read 0.060 N.m where the map and
+/// the wrist-less scene read 0.148; at 1e6 a contact 3.6 mm off still read 7 % low.
+pub const SERVO_KP_ROT: f64 = 1.0e7;
 /// Rotational inertia of the wrist about each axis (kg m^2): the servo's period is then
-/// 14 ms, 70 time steps.
-pub const WRIST_INERTIA: f64 = 0.05;
+/// 1.4 ms, 7 time steps (critically damped, it settles within the press).
+pub const WRIST_INERTIA: f64 = 0.5;
 /// Gain of the feed along the approach (N s/m): with the feed at rest, a damping that sets
 /// the approach speed, force / gain (5 mm/s at 50 N: 1 µm per step).
 pub const APPROACH_DAMPING: f64 = 10000.0;
