@@ -489,7 +489,7 @@ impl Filter {
         } else {
             evidence.max(0.0)
         };
-        if self.lost_evidence < ((1.0 - self.cfg.lost) / self.cfg.lost).ln() {
+        if self.lost_evidence <= ((1.0 - self.cfg.lost) / self.cfg.lost).ln() {
             return 0;
         }
         self.lost_evidence = 0.0;
