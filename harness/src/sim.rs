@@ -401,11 +401,23 @@ impl World for Sim {
         Ok(())
     }
 
-    /// The wrist's hinges take the rotation's Euler angles (R = Rz Ry Rx); an angle about
-    /// an axis the scene has no hinge for is dropped up to [`UNHINGED`], refused beyond.
+    /// The wrist's hinges take the rotation's Euler angles (R = Rz Ry Rx). Without a yaw
+    /// hinge the two tilts point the tool's axis exactly where R does, and what is left is
+    /// a turn about that axis: Euler angles with their yaw dropped would tilt the axis by
+    /// about that yaw times the tilt (4 microradians at 1 and -1 degrees), and a flat face
+    /// on a rim shifts its load over such a tilt. An angle about an axis the scene has no
+    /// hinge for is dropped up to [`UNHINGED`], refused beyond.
     fn set_tcp_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
-        let (rx, ry, rz) = Rotation3::from_scaled_axis(Vector3::from(rot)).euler_angles();
-        let mut angles = [rx, ry, rz];
+        let r = Rotation3::from_scaled_axis(Vector3::from(rot));
+        let mut angles = if self.wrist.iter().any(|h| h.axis == 2) {
+            let (rx, ry, rz) = r.euler_angles();
+            [rx, ry, rz]
+        } else {
+            let n = r * Vector3::z();
+            let (rx, ry) = ((-n.y).asin(), n.x.atan2(n.z));
+            let about_axis = (Rotation3::from_euler_angles(rx, ry, 0.0).inverse() * r).angle();
+            [rx, ry, about_axis]
+        };
         for (k, a) in angles.iter_mut().enumerate() {
             if self.wrist.iter().all(|h| h.axis != k) && a.abs() <= UNHINGED {
                 *a = 0.0;
