@@ -414,7 +414,7 @@ impl World for Sim {
             [rx, ry, rz]
         } else {
             let n = r * Vector3::z();
-            let (rx, ry) = ((-n.y).asin(), n.x.atan2(n.z));
+            let (rx, ry) = ((-n.y).clamp(-1.0, 1.0).asin(), n.x.atan2(n.z));
             let about_axis = (Rotation3::from_euler_angles(rx, ry, 0.0).inverse() * r).angle();
             [rx, ry, about_axis]
         };
