@@ -12,6 +12,7 @@ pub mod file;
 pub mod generate;
 pub mod map;
 pub mod mesh;
+pub mod process;
 pub mod task;
 pub mod vision;
 pub mod wrench;

@@ -17,6 +17,7 @@ use harness::{boundary, runtime, scene, sim};
 use cli::{Cli, Command, mm};
 
 fn main() -> anyhow::Result<()> {
+    ftmap::process::die_quietly_on_broken_pipe();
     run(Cli::parse())
 }
 

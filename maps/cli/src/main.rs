@@ -171,6 +171,7 @@ fn parse_at(s: &str) -> Result<(String, f64), String> {
 }
 
 fn main() -> Result<()> {
+    ftmap::process::die_quietly_on_broken_pipe();
     match Cli::parse().cmd {
         Cmd::Generate {
             task,

@@ -402,3 +402,30 @@ fn a_grid_too_coarse_for_the_fit_is_warned_of_and_no_other() {
         assert!(text.contains("the pixel 0.2500 mm"), "{text}");
     }
 }
+
+#[test]
+fn a_reader_that_goes_away_ends_the_output_without_a_panic() {
+    // `ftmap info F | head -1`: the reader closes the pipe before ftmap writes. Unix tools
+    // end by SIGPIPE there; Rust's runtime ignores it, and printing then panicked.
+    use std::os::unix::process::ExitStatusExt;
+    let (dir, task) = scratch("pipe");
+    let map = dir.join("peg.ftmap");
+    ok(&[
+        "generate",
+        "--task",
+        task.to_str().unwrap(),
+        "--out",
+        map.to_str().unwrap(),
+    ]);
+    let (reader, writer) = std::io::pipe().expect("a pipe");
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_ftmap"))
+        .args(["info", map.to_str().unwrap()])
+        .stdout(writer)
+        .output()
+        .expect("ftmap runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "{:?}", out.status);
+    std::fs::remove_dir_all(&dir).ok();
+}
