@@ -173,15 +173,12 @@ fn a_peg_tilted_like_a_tilted_hole_goes_in_along_its_axis_and_an_upright_one_doe
     assert!(upright.settled && !upright.inserted, "upright: {upright:?}");
 }
 
-/// Peg_in_hole's sensor origin above the peg's face (m).
-const SENSOR_HEIGHT: f64 = 0.06;
-
-/// The wrench `w` (map convention) with its torque about the point of the peg's face on
-/// the approach axis instead of the sensor: a force acting in the face has no torque
-/// across the approach about it.
-fn about_the_face(mut w: [f64; 6]) -> [f64; 6] {
-    w[3] -= SENSOR_HEIGHT * w[1];
-    w[4] += SENSOR_HEIGHT * w[0];
+/// The wrench `w` (map convention) with its torque about the point of part A's face (the
+/// task frame's origin, approach -z) on the approach axis instead of the sensor, `height`
+/// above it: a force acting in the face has no torque across the approach about it.
+fn about_the_face(mut w: [f64; 6], height: f64) -> [f64; 6] {
+    w[3] -= height * w[1];
+    w[4] += height * w[0];
     w
 }
 
@@ -196,8 +193,9 @@ fn a_wrist_holds_a_flat_contact_as_stiffly_as_the_map_assumes() {
     // tilted feed leaves half a newton sideways in the tool's frame, held by friction in
     // that face, which the map (force along the approach) lacks: 30 mN.m about the sensor
     // 60 mm up.
-    let (_, mut sim) = common::tilted();
+    let (task, mut sim) = common::tilted();
     let map = common::computed_peg_map();
+    let height = task.contact.sensor_origin[2];
     let together = [1f64.to_radians(), -1f64.to_radians(), 0.0];
     for (d, tilt) in [
         ([0.002, 0.0], [0.0; 3]),
@@ -210,7 +208,7 @@ fn a_wrist_holds_a_flat_contact_as_stiffly_as_the_map_assumes() {
         sim.set_tcp_rotation(tilt).expect("the wrist tilts");
         let c = sim.contact_motion([0.0, 0.0]);
         assert!(c.settled && !c.inserted, "{d:?}: {c:?}");
-        let w = about_the_face(map_wrench(c.raw));
+        let w = about_the_face(map_wrench(c.raw), height);
         let m = map.interpolate(&d).expect("inside the map");
         let size = m[3].hypot(m[4]);
         assert!(

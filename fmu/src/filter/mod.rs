@@ -457,8 +457,8 @@ impl Filter {
             self.cfg.seed ^ PROBE_STREAM.wrapping_mul(u64::from(self.measurements) + 1),
         );
         let offset = (probe_rng.next_u64() % PROBE_EVERY as u64) as usize;
-        let probes: Vec<usize> = (offset..n).step_by(PROBE_EVERY).collect();
-        for (j, &i) in probes.iter().enumerate() {
+        let probes = (offset..n).step_by(PROBE_EVERY);
+        for (j, i) in probes.clone().enumerate() {
             for k in 0..d {
                 self.scratch.kept[j * d + k] = self.pos[k * n + i];
             }
@@ -470,10 +470,10 @@ impl Filter {
         let is_probe = |i: usize| i >= offset && (i - offset).is_multiple_of(PROBE_EVERY);
         let set = log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i] + ll[i]))
             - log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i]));
-        let prior = log_sum_exp(probes.iter().map(|&i| ll[i])) - (probes.len() as f64).ln();
+        let prior = log_sum_exp(probes.clone().map(|i| ll[i])) - (probes.len() as f64).ln();
         self.scratch.ll = ll;
         self.scratch.rel = rel;
-        for (j, &i) in probes.iter().enumerate() {
+        for (j, i) in probes.enumerate() {
             for k in 0..d {
                 self.pos[k * n + i] = self.scratch.kept[j * d + k];
             }
@@ -493,15 +493,26 @@ impl Filter {
             return 0;
         }
         self.lost_evidence = 0.0;
+        let redrawn = self.respread(Some(-(n as f32).ln()));
+        normalise(&mut self.lw, &mut self.scratch.w);
+        redrawn
+    }
+
+    /// Moves [`RESPREAD_SHARE`] of the particles (evenly spaced from a random first one) to
+    /// uniform random places in Omega, with log weight `weight` where given; returns how
+    /// many.
+    fn respread(&mut self, weight: Option<f32>) -> u32 {
         let step = (1.0 / RESPREAD_SHARE).round() as usize;
         let first = (self.rng.next_u64() % step as u64) as usize;
-        let mean = -(n as f32).ln();
-        for i in (first..n).step_by(step) {
+        let redrawn = (first..self.cfg.particles).step_by(step);
+        let count = redrawn.len() as u32;
+        for i in redrawn {
             self.spread(i);
-            self.lw[i] = mean;
+            if let Some(w) = weight {
+                self.lw[i] = w;
+            }
         }
-        normalise(&mut self.lw, &mut self.scratch.w);
-        (first..n).step_by(step).len() as u32
+        count
     }
 
     /// Multiplies the weights by the likelihood and normalises (log-sum-exp); re-spreads a
@@ -517,12 +528,7 @@ impl Filter {
             // No particle explains the measurement: start a share of them afresh, forget the
             // old weights, and weigh again.
             report.respread += 1;
-            let n = self.cfg.particles;
-            let step = (1.0 / RESPREAD_SHARE).round() as usize;
-            let offset = (self.rng.next_u64() % step as u64) as usize;
-            for i in (offset..n).step_by(step) {
-                self.spread(i);
-            }
+            self.respread(None);
             self.log_likelihood(ev, &mut rel, &mut ll);
             self.lw.fill(0.0);
         }

@@ -4,12 +4,10 @@
 
 use std::path::Path;
 
-use ftmap::{Axis, Dof, FtMap, Grid, GridAxis, MapMeta, Pose, WrenchModel};
+use ftfusion_testkit::CLEARANCE;
+use ftmap::{Axis, Dof, FtMap, Grid, GridAxis, MapMeta, Pose};
 
 use super::*;
-
-/// Radial clearance of the synthetic fit (m).
-const CLEARANCE: f64 = 5e-5;
 /// Yaw step of the synthetic map (rad): 2.5 degrees, 18 steps per eighth of a turn.
 const YAW_STEP: f64 = std::f64::consts::PI / 72.0;
 
@@ -26,17 +24,8 @@ fn yaw_map() -> FtMap {
     ])
     .expect("grid");
     let meta = MapMeta {
-        task: "synthetic_yaw".into(),
-        model: WrenchModel::Centroid,
-        approach: [0.0, 0.0, -1.0],
-        force: 50.0,
-        friction: 0.0,
-        sensor_origin: [0.0; 3],
-        pixel: 0.0,
-        sources: Vec::new(),
-        generator: "ftfusion::synthetic".into(),
-        clearance: Some(CLEARANCE),
         symmetry: Some(8),
+        ..ftfusion_testkit::synthetic_meta("synthetic_yaw")
     };
     let mut map = FtMap::zeros(grid, meta);
     for cell in 0..map.grid().cells() {

@@ -28,6 +28,24 @@ pub fn field(x: f64, y: f64, rx: f64, ry: f64) -> [f32; 7] {
     [fx, fy, FORCE, tx, ty, 0.0, depth].map(|v| v as f32)
 }
 
+/// The metadata of a synthetic map of task `task`: centroid model, approach -z, [`FORCE`],
+/// no friction, the sensor at the origin, the fit's [`CLEARANCE`], no symmetry.
+pub fn synthetic_meta(task: &str) -> MapMeta {
+    MapMeta {
+        task: task.into(),
+        model: WrenchModel::Centroid,
+        approach: [0.0, 0.0, -1.0],
+        force: FORCE,
+        friction: 0.0,
+        sensor_origin: [0.0, 0.0, 0.0],
+        pixel: 0.0,
+        sources: Vec::new(),
+        generator: "ftfusion::synthetic".into(),
+        clearance: Some(CLEARANCE),
+        symmetry: None,
+    }
+}
+
 /// The field sampled on object.x, object.y in +-`size` at `step` (m), and when `rot` is
 /// `Some((size, step))` also on object.rx, object.ry (rad).
 pub fn peg_map(size: f64, step: f64, rot: Option<(f64, f64)>) -> ftmap::Result<FtMap> {
@@ -41,20 +59,7 @@ pub fn peg_map(size: f64, step: f64, rot: Option<(f64, f64)>) -> ftmap::Result<F
         axes.push(GridAxis::symmetric(dof(Axis::Ry), s, d)?);
     }
     let grid = Grid::new(axes)?;
-    let meta = MapMeta {
-        task: "synthetic_peg".into(),
-        model: WrenchModel::Centroid,
-        approach: [0.0, 0.0, -1.0],
-        force: FORCE,
-        friction: 0.0,
-        sensor_origin: [0.0, 0.0, 0.0],
-        pixel: 0.0,
-        sources: Vec::new(),
-        generator: "ftfusion::synthetic".into(),
-        clearance: Some(CLEARANCE),
-        symmetry: None,
-    };
-    let mut map = FtMap::zeros(grid, meta);
+    let mut map = FtMap::zeros(grid, synthetic_meta("synthetic_peg"));
     for cell in 0..map.grid().cells() {
         let c = map.grid().coords(cell);
         let (rx, ry) = if c.len() == 4 {
