@@ -84,7 +84,7 @@ impl SubGrid {
 }
 
 /// The twelve pose values (grip x..rz, object x..rz) of a cell.
-fn pose_values(grid: &Grid, idx: &[usize]) -> [f64; 12] {
+pub(crate) fn pose_values(grid: &Grid, idx: &[usize]) -> [f64; 12] {
     let mut v = [0.0; 12];
     for (k, a) in grid.axes().iter().enumerate() {
         v[a.dof.index()] = a.value(idx[k]);
@@ -93,7 +93,7 @@ fn pose_values(grid: &Grid, idx: &[usize]) -> [f64; 12] {
 }
 
 /// A rotation from three rotation-vector components.
-fn rotation(r: &[f64]) -> Rotation3<f64> {
+pub(crate) fn rotation(r: &[f64]) -> Rotation3<f64> {
     Rotation3::new(Vector3::new(r[0], r[1], r[2]))
 }
 

@@ -4,7 +4,8 @@
 //! and its DOFs, the parametric CAD solids), [`mesh`], [`depth`] (the z-buffer backends),
 //! [`wrench`] (wrench models), [`generate`] (the FT-Map computation), [`map`] (the map type,
 //! its lookup and file format), [`vision`] (the camera and the parts' features) and
-//! [`file`] (reading the files a user names, bounded).
+//! [`file`] (reading the files a user names, bounded); [`verify`] checks a computed map
+//! against the exact geometry.
 
 pub mod depth;
 pub mod error;
@@ -14,6 +15,7 @@ pub mod map;
 pub mod mesh;
 pub mod process;
 pub mod task;
+pub mod verify;
 pub mod vision;
 pub mod wrench;
 

@@ -138,6 +138,22 @@ enum Cmd {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Checks a computed map against the exact geometry of its meshes (parry's shape cast and
+    /// ray queries) at sampled cells: depth within the contact tolerance, contact centroid
+    /// within a pixel; exits 1 when fewer than 99.9 % of the cells agree.
+    Verify {
+        file: PathBuf,
+        /// Task name or path of the task.toml the map was computed from (default: a
+        /// task.toml beside the map, else the committed task the map names).
+        #[arg(long)]
+        task: Option<String>,
+        /// Cells to check (all when the map has fewer).
+        #[arg(long, default_value_t = 2000)]
+        samples: usize,
+        /// Seed of the cell sample and of the rays' offset from the pixel lattice.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Writes (or with --check, verifies) the STL meshes of tasks from their [geometry] tables.
     Cad {
         /// Task name or `all`.
@@ -204,7 +220,94 @@ fn main() -> Result<()> {
         Cmd::Merge { shards, out } => cmd_merge(&shards, &out),
         Cmd::Vision { task, out } => cmd_vision(&task, &out),
         Cmd::Cad { task, check } => cmd_cad(&task, check),
+        Cmd::Verify {
+            file,
+            task,
+            samples,
+            seed,
+        } => cmd_verify(&file, task.as_deref(), samples, seed),
     }
+}
+
+fn cmd_verify(file: &Path, task: Option<&str>, samples: usize, seed: u64) -> Result<()> {
+    let map = format::load(file)?;
+    let beside = file.with_file_name("task.toml");
+    let task = match task {
+        Some(t) => Task::find(t)?,
+        None if beside.is_file() => Task::load(&beside)?,
+        None => Task::find(&map.meta().task)?,
+    };
+    let mesh_a = ftmap::mesh::Mesh::load(&task.part_a.mesh)?;
+    let mesh_b = ftmap::mesh::Mesh::load(&task.part_b.mesh)?;
+    let start = Instant::now();
+    let v = ftmap::verify::verify(
+        &map,
+        &task,
+        [&mesh_a, &mesh_b],
+        ftmap::verify::VerifyOptions { samples, seed },
+    )?;
+    let qs = [0.5, 0.99, 0.999, 1.0];
+    let um = |xs: Vec<f64>| {
+        xs.iter()
+            .map(|x| format!("{:.2}", x * 1e6))
+            .collect::<Vec<_>>()
+            .join(" / ")
+    };
+    println!(
+        "verified {} cells of {} against task {} in {:.1} s",
+        v.checks.len(),
+        file.display(),
+        task.name,
+        start.elapsed().as_secs_f64()
+    );
+    println!(
+        "depth     |error| median / p99 / p99.9 / max {} um; within the contact tolerance ({:.1} um) {:.2} %",
+        um(v.depth_quantiles(&qs)),
+        v.tolerance * 1e6,
+        100.0 * v.depth_share()
+    );
+    match v.centroid_share() {
+        Some(s) => println!(
+            "centroid  error median / p99 / p99.9 / max {} um; within a pixel ({:.1} um) {:.2} %",
+            um(v.centroid_quantiles(&qs)),
+            v.pixel * 1e6,
+            100.0 * s
+        ),
+        None => println!(
+            "centroid  not checked: a {:?} map's lever point is not the contact centroid",
+            map.meta().model
+        ),
+    }
+    for c in v.worst(5) {
+        let coords: Vec<String> = map
+            .grid()
+            .axes()
+            .iter()
+            .zip(&c.coords)
+            .map(|(a, x)| format!("{}={}", a.dof, a.dof.display(*x)))
+            .collect();
+        println!(
+            "worst     cell {} ({}): depth error {:.2} um, centroid error {}",
+            c.cell,
+            coords.join(" "),
+            c.depth_error * 1e6,
+            match c.centroid_error {
+                None => "-".into(),
+                Some(e) if e.is_infinite() =>
+                    "none: no ray along the approach sees the contact".into(),
+                Some(e) => format!("{:.2} um", e * 1e6),
+            }
+        );
+    }
+    if !v.passes() {
+        bail!(
+            "{}: fewer than {:.1} % of the sampled cells agree with the exact geometry",
+            file.display(),
+            100.0 * ftmap::verify::REQUIRED_SHARE
+        );
+    }
+    println!("passed");
+    Ok(())
 }
 
 fn cmd_vision(task: &str, out: &Path) -> Result<()> {
