@@ -80,23 +80,19 @@ pub struct Verification {
 impl Verification {
     /// Share of the cells whose depth is within the contact tolerance.
     pub fn depth_share(&self) -> f64 {
-        share(&self.checks, |c| c.depth_error.abs() <= self.tolerance)
+        let within = self
+            .checks
+            .iter()
+            .filter(|c| c.depth_error.abs() <= self.tolerance);
+        within.count() as f64 / self.checks.len().max(1) as f64
     }
 
     /// Share of the cells with a centroid check whose lever point is within a pixel of the
     /// exact centroid (`None`: no centroid checked).
     pub fn centroid_share(&self) -> Option<f64> {
-        let checked: Vec<_> = self
-            .checks
-            .iter()
-            .filter(|c| c.centroid_error.is_some())
-            .cloned()
-            .collect();
-        (!checked.is_empty()).then(|| {
-            share(&checked, |c| {
-                c.centroid_error.is_some_and(|e| e <= self.pixel)
-            })
-        })
+        let errors = self.checks.iter().filter_map(|c| c.centroid_error);
+        let checked = errors.clone().count();
+        (checked > 0).then(|| errors.filter(|&e| e <= self.pixel).count() as f64 / checked as f64)
     }
 
     /// Whether both shares reach [`REQUIRED_SHARE`].
@@ -126,10 +122,6 @@ impl Verification {
         all.truncate(n);
         all
     }
-}
-
-fn share(checks: &[CellCheck], ok: impl Fn(&CellCheck) -> bool) -> f64 {
-    checks.iter().filter(|c| ok(c)).count() as f64 / checks.len().max(1) as f64
 }
 
 fn quantiles(values: impl Iterator<Item = f64>, qs: &[f64]) -> Vec<f64> {
@@ -190,12 +182,7 @@ pub fn verify_cells(
             });
         }
     }
-    let parts = Parts::new(
-        task,
-        mesh_a,
-        mesh_b,
-        map.meta().model == WrenchModel::Centroid,
-    )?;
+    let parts = Parts::new(task, mesh_a, mesh_b, meta.model == WrenchModel::Centroid)?;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x5eed_0ff5);
     // Off the pixel lattice by a random share of a pixel in each direction (never zero).
     let offset = [0, 1].map(|_| 0.1 + 0.8 * (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64);
@@ -280,18 +267,13 @@ impl<'a> Parts<'a> {
             .ok_or_else(|| missed("part A swept along the approach misses part B"))?;
         let values = map.cell(cell);
         let depth_error = f64::from(values[NCH - 1]) - (t_obj.dot(&view.w) + rise);
-        let centroid_error = if self.centroid {
-            // A contact that no ray along the approach sees (an edge on a wall) is one the
-            // z-buffer cannot see either: the map's lever point is nowhere near it.
+        // A contact that no ray along the approach sees (an edge on a wall) is one the
+        // z-buffer cannot see either: the map's lever point is nowhere near it.
+        let centroid_error = self.centroid.then(|| {
             let Some((centroid, height)) =
                 self.region(&view, &b_pose, rise, offset, [a_range, b_range])
             else {
-                return Ok(CellCheck {
-                    cell,
-                    coords,
-                    depth_error,
-                    centroid_error: Some(f64::INFINITY),
-                });
+                return f64::INFINITY;
             };
             let force = r1.inverse() * Vector3::new(values[0], values[1], values[2]).cast::<f64>();
             let torque = r1.inverse() * Vector3::new(values[3], values[4], values[5]).cast::<f64>();
@@ -300,10 +282,8 @@ impl<'a> Parts<'a> {
             let nearest = sensor + force.cross(&torque) / force.norm_squared();
             let along = (height - nearest.dot(&view.w)) / force.dot(&view.w);
             let lever = view.project(&Point3::from(nearest + force * along));
-            Some((lever[0] - centroid[0]).hypot(lever[1] - centroid[1]))
-        } else {
-            None
-        };
+            (lever[0] - centroid[0]).hypot(lever[1] - centroid[1])
+        });
         Ok(CellCheck {
             cell,
             coords,
@@ -369,14 +349,8 @@ impl<'a> Parts<'a> {
         offset: [f64; 2],
         ranges: [[f64; 2]; 2],
     ) -> Option<([f64; 2], f64)> {
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for c in self.a.local_aabb().vertices() {
-            let p = view.project(&c);
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let a_box = [view.u, view.v].map(|axis| span(&self.a, &Isometry3::identity(), &axis));
+        let (lo, hi) = (a_box.map(|r| r[0]), a_box.map(|r| r[1]));
         let rays = Rays {
             parts: self,
             view,
@@ -389,14 +363,9 @@ impl<'a> Parts<'a> {
             return Some((coarse.centroid, coarse.height));
         }
         let [lo, hi] = coarse.bounds;
-        let pitch = (coarse.pitch / REFINE).max(
-            ((hi[0] - lo[0] + 2.0 * coarse.pitch) * (hi[1] - lo[1] + 2.0 * coarse.pitch)
-                / MAX_RAYS)
-                .sqrt(),
-        );
         let fine = rays.scan(
             [lo.map(|x| x - coarse.pitch), hi.map(|x| x + coarse.pitch)],
-            pitch,
+            coarse.pitch / REFINE,
             offset,
         )?;
         Some((fine.centroid, fine.height))
