@@ -6,7 +6,6 @@ use std::path::PathBuf;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use ftmap::mesh::Mesh;
 use ftmap::{FtMap, Grid, GridAxis, MapMeta, NCH, SourceMesh, Task, WrenchModel};
 
 use crate::error::{HarnessError, Result, create_parent};
@@ -114,14 +113,15 @@ pub fn scan(sim: &mut Sim, task: &Task, step: f64, size: f64) -> Result<FtMap> {
 }
 
 fn meta(task: &Task) -> Result<MapMeta> {
-    let source = |role: &str, path: &std::path::Path| -> Result<SourceMesh> {
+    let source = |role: &str, part: &ftmap::task::Part| -> Result<SourceMesh> {
         Ok(SourceMesh {
             role: role.into(),
-            file: path
+            file: part
+                .mesh
                 .file_name()
                 .map(|f| f.to_string_lossy().into_owned())
                 .unwrap_or_default(),
-            sha256: Mesh::load(path)?.sha256,
+            sha256: part.load()?.sha256,
         })
     };
     Ok(MapMeta {
@@ -132,10 +132,7 @@ fn meta(task: &Task) -> Result<MapMeta> {
         friction: task.contact.friction,
         sensor_origin: task.contact.sensor_origin,
         pixel: 0.0,
-        sources: vec![
-            source("A", &task.part_a.mesh)?,
-            source("B", &task.part_b.mesh)?,
-        ],
+        sources: vec![source("A", &task.part_a)?, source("B", &task.part_b)?],
         generator: format!(
             "harness {} scan (MuJoCo {})",
             env!("CARGO_PKG_VERSION"),

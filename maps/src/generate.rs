@@ -105,8 +105,8 @@ pub fn generate(
     opts: &GenerateOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<FtMap> {
-    let mesh_a = Mesh::load(&task.part_a.mesh)?;
-    let mesh_b = Mesh::load(&task.part_b.mesh)?;
+    let mesh_a = task.part_a.load()?;
+    let mesh_b = task.part_b.load()?;
     generate_with(task, &mesh_a, &mesh_b, backend, opts, progress)
 }
 

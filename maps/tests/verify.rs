@@ -15,7 +15,7 @@ fn computed(name: &str) -> (Task, FtMap, [Mesh; 2]) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
     let (path, _) = cached(&task, &dir).expect("its map");
     let map = format::load(&path).expect("the cached map loads");
-    let meshes = [&task.part_a.mesh, &task.part_b.mesh].map(|p| Mesh::load(p).expect("mesh"));
+    let meshes = [&task.part_a, &task.part_b].map(|p| p.load().expect("mesh"));
     (task, map, meshes)
 }
 

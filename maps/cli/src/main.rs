@@ -8,7 +8,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use ftmap::depth::DepthBackend;
-use ftmap::generate::{GenerateOptions, generate, merge, shard_configs};
+use ftmap::generate::{GenerateOptions, generate, generate_with, merge, shard_configs};
 use ftmap::map::format;
 use ftmap::map::resolution::too_coarse;
 use ftmap::{CHANNELS, FtMap, Task, UNITS, WrenchModel};
@@ -229,6 +229,15 @@ fn main() -> Result<()> {
     }
 }
 
+/// A task's part, its mesh's warnings printed.
+fn load_part(part: &ftmap::task::Part) -> Result<ftmap::mesh::Mesh> {
+    let mesh = part.load()?;
+    for w in &mesh.warnings {
+        eprintln!("warning: mesh {}: {w}", part.mesh.display());
+    }
+    Ok(mesh)
+}
+
 fn cmd_verify(file: &Path, task: Option<&str>, samples: usize, seed: u64) -> Result<()> {
     let map = format::load(file)?;
     let beside = file.with_file_name("task.toml");
@@ -237,8 +246,7 @@ fn cmd_verify(file: &Path, task: Option<&str>, samples: usize, seed: u64) -> Res
         None if beside.is_file() => Task::load(&beside)?,
         None => Task::find(&map.meta().task)?,
     };
-    let mesh_a = ftmap::mesh::Mesh::load(&task.part_a.mesh)?;
-    let mesh_b = ftmap::mesh::Mesh::load(&task.part_b.mesh)?;
+    let (mesh_a, mesh_b) = (load_part(&task.part_a)?, load_part(&task.part_b)?);
     let start = Instant::now();
     let v = ftmap::verify::verify(
         &map,
@@ -382,8 +390,11 @@ fn cmd_generate(
     );
     bar.set_message(format!("{} ({})", task.name, backend.name()));
     let start = Instant::now();
-    let map = generate(
+    let (mesh_a, mesh_b) = (load_part(&task.part_a)?, load_part(&task.part_b)?);
+    let map = generate_with(
         &task,
+        &mesh_a,
+        &mesh_b,
         backend.as_ref(),
         &GenerateOptions { model, shard },
         &|n| bar.inc(n),

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::{MapError, Result};
+use crate::mesh::Mesh;
 
 pub mod cad;
 pub mod dof;
@@ -17,12 +18,55 @@ use cad::Geometry;
 use dof::{Axis, Dof, Pose};
 use omega::{Grid, GridAxis};
 
-/// A part of the task: its mesh file (relative to the task file).
+/// A part of the task: its mesh file (relative to the task file) and the file's units.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Part {
-    /// Binary or ASCII STL, metres, in the part's own frame.
+    /// Binary or ASCII STL in the part's own frame.
     pub mesh: PathBuf,
+    /// The length unit of the mesh file's coordinates (default metres).
+    #[serde(default)]
+    pub units: Units,
+}
+
+impl Part {
+    /// The part's mesh in metres, checked ([`Mesh::load_scaled`]).
+    pub fn load(&self) -> Result<Mesh> {
+        Mesh::load_scaled(&self.mesh, self.units.metres())
+    }
+}
+
+/// The length unit of a mesh file: CAD systems mostly export STL in millimetres.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Units {
+    /// Metres.
+    #[default]
+    M,
+    /// Millimetres.
+    Mm,
+    /// Inches.
+    In,
+}
+
+impl Units {
+    /// One unit in metres.
+    pub fn metres(self) -> f64 {
+        match self {
+            Self::M => 1.0,
+            Self::Mm => 0.001,
+            Self::In => 0.0254,
+        }
+    }
+
+    /// The unit's name as `task.toml` writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::M => "m",
+            Self::Mm => "mm",
+            Self::In => "in",
+        }
+    }
 }
 
 /// How contact is made: along `approach` with `force`.
@@ -303,9 +347,11 @@ impl Task {
             path: path.to_owned(),
             part_a: Part {
                 mesh: dir.join(file.part_a.mesh),
+                ..file.part_a
             },
             part_b: Part {
                 mesh: dir.join(file.part_b.mesh),
+                ..file.part_b
             },
             contact,
             omega: file.omega,

@@ -1,12 +1,15 @@
-//! Triangle meshes read from STL files (binary or ASCII), with their SHA-256 and
-//! per-triangle normals.
+//! Triangle meshes read from STL files (binary or ASCII) in metres, millimetres or inches,
+//! checked for soundness ([`check`]), with their SHA-256 and per-triangle normals.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Point3, Vector3};
 use sha2::{Digest, Sha256};
 
 use crate::error::{MapError, Result};
+
+pub mod check;
 
 /// A triangle mesh in its part's own frame (m).
 #[derive(Debug, Clone)]
@@ -19,11 +22,21 @@ pub struct Mesh {
     pub vertices: Vec<Point3<f64>>,
     /// Triangles as vertex indices, counter-clockwise seen from outside.
     pub faces: Vec<[u32; 3]>,
+    /// What [`check`] found wrong with the file that does not refuse it.
+    pub warnings: Vec<check::Defect>,
 }
 
 impl Mesh {
-    /// Reads an STL file; refuses missing, unreadable, empty or non-finite meshes.
+    /// Reads an STL file in metres; see [`Mesh::load_scaled`].
     pub fn load(path: &Path) -> Result<Self> {
+        Self::load_scaled(path, 1.0)
+    }
+
+    /// Reads an STL file whose coordinates are in units of `scale` metres (0.001: mm);
+    /// refuses missing, unreadable, empty or non-finite meshes and those with a fatal
+    /// [`check::Defect`] (naming each), keeps the others' defects as warnings and drops
+    /// duplicate triangles. Vertices equal in the file are one vertex (0 and -0 too).
+    pub fn load_scaled(path: &Path, scale: f64) -> Result<Self> {
         let err = |reason: String| MapError::Mesh {
             path: path.to_owned(),
             reason,
@@ -34,22 +47,42 @@ impl Mesh {
         if stl.faces.is_empty() {
             return Err(err("the mesh has no triangles".into()));
         }
-        let vertices: Vec<Point3<f64>> = stl
+        if stl
             .vertices
             .iter()
-            .map(|v| Point3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2])))
-            .collect();
-        if vertices
-            .iter()
-            .any(|v| !v.coords.iter().all(|c| c.is_finite()))
+            .any(|v| !v.0.iter().all(|c| c.is_finite()))
         {
             return Err(err("a vertex has a NaN or infinite coordinate".into()));
         }
-        let faces = stl
+        // stl_io merges vertices by their bits: merge 0 with -0 as well.
+        let mut index = HashMap::new();
+        let mut vertices = Vec::new();
+        let merged: Vec<u32> = stl
+            .vertices
+            .iter()
+            .map(|v| {
+                let key = v.0.map(|c| (c + 0.0).to_bits());
+                *index.entry(key).or_insert_with(|| {
+                    vertices.push(Point3::from(v.0.map(|c| f64::from(c) * scale)));
+                    vertices.len() as u32 - 1
+                })
+            })
+            .collect();
+        let faces: Vec<[u32; 3]> = stl
             .faces
             .iter()
-            .map(|f| f.vertices.map(|i| i as u32))
+            .map(|f| f.vertices.map(|i| merged[i]))
             .collect();
+        let (defects, faces) = check::check(&vertices, &faces);
+        let (fatal, warnings): (Vec<_>, Vec<_>) = defects.into_iter().partition(|d| d.fatal);
+        if !fatal.is_empty() {
+            let list: Vec<String> = fatal.iter().map(ToString::to_string).collect();
+            return Err(err(format!(
+                "{} triangles, refused: {}",
+                stl.faces.len(),
+                list.join("; ")
+            )));
+        }
         let sha256 = Sha256::digest(&bytes)
             .iter()
             .map(|b| format!("{b:02x}"))
@@ -59,6 +92,7 @@ impl Mesh {
             sha256,
             vertices,
             faces,
+            warnings,
         })
     }
 
@@ -69,6 +103,7 @@ impl Mesh {
             sha256: String::new(),
             vertices,
             faces,
+            warnings: Vec::new(),
         }
     }
 
