@@ -85,9 +85,9 @@ impl fmt::Display for Boundaries {
 /// without chamfers. Part A goes in this much farther off than the fit allows.
 ///
 /// # Errors
-/// When the task has no `[geometry]`.
+/// When the task's fit cannot be had ([`Task::fit`]).
 pub fn chamfer_yield(task: &Task) -> Result<f64> {
-    if task.geometry()?.chamfers() == 0.0 {
+    if task.fit()?.chamfers() == 0.0 {
         return Ok(0.0);
     }
     let (f, mu) = (task.contact.force, task.contact.friction);
@@ -111,11 +111,8 @@ fn inserts(sim: &mut Sim, offset: [f64; 2]) -> bool {
 /// # Errors
 /// When part A does not go in centred, or goes in at the bracket's outer end.
 pub fn boundary(sim: &mut Sim, task: &Task, theta: f64) -> Result<Boundary> {
-    let geometry = task.geometry()?;
-    let (geometric, chamfer_reach) = (
-        geometry.insertion_limit(theta),
-        geometry.chamfer_reach(theta),
-    );
+    let fit = task.fit()?;
+    let (geometric, chamfer_reach) = (fit.insertion_limit(theta), fit.chamfer_reach(theta));
     let along = |d: f64| [d * theta.cos(), d * theta.sin()];
     let invalid = |reason: String| HarnessError::Invalid {
         what: "insertion boundary",

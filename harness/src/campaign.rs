@@ -13,6 +13,7 @@ use rand::{Rng, SeedableRng};
 
 use ftmap::map::format;
 use ftmap::map::resolution::{Coarse, too_coarse};
+use ftmap::task::fit::Fit;
 use ftmap::task::omega::GridAxis;
 use ftmap::{Axis, Pose, Task};
 
@@ -247,6 +248,7 @@ impl Campaign {
         let task = Task::find(&options.task)?;
         check_dofs(&task, options.vision)?;
         let map = resolve_map(options.map.as_deref(), &task, note)?;
+        let fit = task.fit()?;
         let world: Box<dyn World> = match &options.world {
             WorldKind::Mujoco => Box::new(Sim::of_task(&task)?),
             WorldKind::Map(file) => {
@@ -255,10 +257,10 @@ impl Campaign {
                     None => cached_map(&task, note)?,
                 };
                 let (world_map, _) = format::load_any(&file)?;
-                Box::new(MapWorld::new(world_map, task.geometry()?.clone())?)
+                Box::new(MapWorld::new(world_map, fit.clone())?)
             }
         };
-        let mut config = trial_config(&options, &task, map)?;
+        let mut config = trial_config(&options, &task, fit.as_ref(), map)?;
         let eye = open_eye(&options, &task, &mut config, note)?;
         let fmu = match options.strategy {
             Strategy::Pf => {
@@ -523,7 +525,7 @@ fn cached_map(task: &Task, note: &mut dyn FnMut(SetupNote)) -> Result<PathBuf> {
 
 /// The twist of a task whose yaw is uncertain, from its map (the fit's yaw play there) and
 /// geometry; `None` for another task, or where the map shows no play or is the FMU's own.
-fn twist_setup(task: &Task, map: Option<&Path>) -> Result<Option<Twist>> {
+fn twist_setup(task: &Task, fit: &dyn Fit, map: Option<&Path>) -> Result<Option<Twist>> {
     let Some(file) = map else {
         return Ok(None);
     };
@@ -534,7 +536,7 @@ fn twist_setup(task: &Task, map: Option<&Path>) -> Result<Option<Twist>> {
     let (m, _) = format::load_any(file)?;
     let play = m.rotational_play(k);
     Ok((play > 0.0).then(|| Twist {
-        clearance: task.geometry().map_or(0.0, |g| g.clearance()),
+        clearance: fit.clearance(),
         play,
         period: task
             .omega
@@ -547,11 +549,12 @@ fn twist_setup(task: &Task, map: Option<&Path>) -> Result<Option<Twist>> {
 fn trial_config(
     options: &CampaignOptions,
     task: &Task,
+    fit: &dyn Fit,
     map: Option<PathBuf>,
 ) -> Result<TrialConfig> {
     let size = task.omega.size_trans;
     // The spiral's pitch stays below twice the radial clearance.
-    let spiral_step = 1.6 * task.geometry()?.clearance();
+    let spiral_step = 1.6 * fit.clearance();
     let spiral_radius = size * 2f64.sqrt();
     let spiral_points = spiral(spiral_step, spiral_radius).len();
     let max_contacts = options.max_contacts.unwrap_or(match options.strategy {
@@ -562,13 +565,10 @@ fn trial_config(
         strategy: options.strategy,
         max_contacts,
         max_sim_time: options.max_sim_time.unwrap_or(0.3 * max_contacts as f64),
-        slide: options
-            .slide
-            .then(|| task.geometry().map(|g| g.clearance()))
-            .transpose()?,
+        slide: options.slide.then(|| fit.clearance()),
         symmetry: task.omega.symmetry,
         twist: if options.twist {
-            twist_setup(task, map.as_deref())?
+            twist_setup(task, fit, map.as_deref())?
         } else {
             None
         },

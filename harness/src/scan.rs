@@ -138,7 +138,7 @@ fn meta(task: &Task) -> Result<MapMeta> {
             env!("CARGO_PKG_VERSION"),
             mujoco_rs::mujoco_version()
         ),
-        clearance: Some(task.geometry()?.clearance()),
+        clearance: Some(task.fit()?.clearance()),
         symmetry: task.omega.symmetry,
     })
 }

@@ -4,7 +4,9 @@
 //! measures the estimator and the strategy with no simulator between the map and the
 //! measurement (and runs a campaign in a fraction of MuJoCo's time).
 
-use ftmap::task::cad::Geometry;
+use std::sync::Arc;
+
+use ftmap::task::fit::Fit;
 use ftmap::{Axis, FtMap, NCH, Pose};
 
 use crate::error::{HarnessError, Result};
@@ -106,7 +108,7 @@ pub struct MapWorld {
     map: FtMap,
     /// The map's [`FtMap::contact_depth`].
     contact_depth: Option<f32>,
-    geometry: Geometry,
+    fit: Arc<dyn Fit>,
     /// Whether the map's first two axes are `grip.x`, `grip.y`.
     has_grip: bool,
     object: [f64; 2],
@@ -115,12 +117,12 @@ pub struct MapWorld {
 
 impl MapWorld {
     /// The world of `map` (over `object.x`, `object.y`, after `grip.x`, `grip.y` where the
-    /// grip is uncertain) for parts of `geometry`.
+    /// grip is uncertain) for parts that fit as `fit` says.
     ///
     /// # Errors
     /// [`HarnessError::MapWorld`] when the map's axes are not exactly `object.x`, `object.y`
     /// or `grip.x`, `grip.y`, `object.x`, `object.y`.
-    pub fn new(map: FtMap, geometry: Geometry) -> Result<Self> {
+    pub fn new(map: FtMap, fit: Arc<dyn Fit>) -> Result<Self> {
         let is = |k: usize, pose, axis| {
             map.grid()
                 .axes()
@@ -147,7 +149,7 @@ impl MapWorld {
         Ok(Self {
             contact_depth: map.contact_depth(),
             map,
-            geometry,
+            fit,
             has_grip,
             object: [0.0; 2],
             grip: [0.0; 2],
@@ -163,7 +165,7 @@ impl MapWorld {
     /// with the map's wrench and depth.
     fn contact_at(&self, xy: [f64; 2]) -> Contact {
         let offset = self.offset(xy);
-        let inserted = self.geometry.inserts(offset);
+        let inserted = self.fit.inserts(offset);
         // The map's axes were checked: the coordinates fit its grid.
         let coords = if self.has_grip {
             vec![self.grip[0], self.grip[1], offset[0], offset[1]]
@@ -215,8 +217,7 @@ impl World for MapWorld {
 
     fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact {
         let len = (to[0] - from[0]).hypot(to[1] - from[1]);
-        let samples =
-            (len / self.geometry.clearance() * SLIDE_SAMPLES_PER_CLEARANCE).ceil() as usize;
+        let samples = (len / self.fit.clearance() * SLIDE_SAMPLES_PER_CLEARANCE).ceil() as usize;
         (0..=samples)
             .map(|k| {
                 let t = k as f64 / samples.max(1) as f64;
@@ -225,7 +226,7 @@ impl World for MapWorld {
                     from[1] + t * (to[1] - from[1]),
                 ]
             })
-            .find(|&p| self.geometry.inserts(self.offset(p)))
+            .find(|&p| self.fit.inserts(self.offset(p)))
             .map_or_else(|| self.contact_at(to), |p| self.contact_at(p))
     }
 

@@ -15,9 +15,9 @@ use harness::world::{MapWorld, World};
 
 fn peg_world() -> (MapWorld, f64) {
     let task = Task::find("peg_in_hole").expect("task peg_in_hole");
-    let geometry = task.geometry().expect("a [geometry]").clone();
-    let c = geometry.clearance();
-    let world = MapWorld::new(common::computed_peg_map().clone(), geometry).expect("x, y map");
+    let fit = task.fit().expect("fit");
+    let c = fit.clearance();
+    let world = MapWorld::new(common::computed_peg_map().clone(), fit).expect("x, y map");
     (world, c)
 }
 
@@ -94,12 +94,11 @@ fn a_map_over_other_axes_is_refused() {
     let grid = task.grid().expect("its grid");
     let meta = common::computed_peg_map().meta().clone();
     let map = ftmap::FtMap::zeros(grid, meta);
-    let geometry = Task::find("peg_in_hole")
+    let fit = Task::find("peg_in_hole")
         .expect("task peg_in_hole")
-        .geometry()
-        .expect("a [geometry]")
-        .clone();
-    let err = MapWorld::new(map, geometry).err().expect("refused");
+        .fit()
+        .expect("fit");
+    let err = MapWorld::new(map, fit).err().expect("refused");
     let text = err.to_string();
     assert!(
         text.contains("object.rx") && text.contains("object.x"),

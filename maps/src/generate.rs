@@ -11,10 +11,12 @@ use rayon::prelude::*;
 
 use crate::depth::{DepthBackend, PixelWindow, RenderJob, Shift, Surface, View};
 use crate::error::{MapError, Result};
+use crate::exact::Pair;
 use crate::map::{FtMap, MapMeta, NCH, SourceMesh};
 use crate::mesh::Mesh;
 use crate::task::Task;
 use crate::task::dof::{Axis, Pose};
+use crate::task::fit::{Fit, MeshFit};
 use crate::task::omega::{Grid, MAX_AXES};
 use crate::wrench::WrenchModel;
 use crate::wrench::WrenchSetup;
@@ -189,7 +191,14 @@ pub fn generate_with(
         })
         .collect(),
         generator: format!("ftmap {} ({})", env!("CARGO_PKG_VERSION"), backend.name()),
-        clearance: task.geometry.as_ref().map(|g| g.clearance()),
+        clearance: match &task.geometry {
+            Some(g) => Some(g.clearance()),
+            // A fit that cannot be measured (parts not in a fit) is no reason to refuse a map.
+            None => Pair::new(mesh_a, mesh_b)
+                .and_then(|pair| MeshFit::measure(task, &pair))
+                .ok()
+                .map(|f| f.clearance()),
+        },
         symmetry: task.omega.symmetry,
     };
     let mut map = FtMap::zeros(grid.clone(), meta);

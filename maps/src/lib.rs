@@ -4,11 +4,12 @@
 //! and its DOFs, the parametric CAD solids), [`mesh`], [`depth`] (the z-buffer backends),
 //! [`wrench`] (wrench models), [`generate`] (the FT-Map computation), [`map`] (the map type,
 //! its lookup and file format), [`vision`] (the camera and the parts' features) and
-//! [`file`] (reading the files a user names, bounded); [`verify`] checks a computed map
-//! against the exact geometry.
+//! [`file`] (reading the files a user names, bounded); [`exact`] answers queries on the exact
+//! geometry, with which [`verify`] checks a computed map.
 
 pub mod depth;
 pub mod error;
+pub mod exact;
 pub mod file;
 pub mod generate;
 pub mod map;

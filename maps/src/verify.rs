@@ -6,14 +6,14 @@
 //! tolerance; the lever point of a centroid map's wrench with the second within a pixel.
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
-use parry3d_f64::query::{self, Ray, RayCast, ShapeCastOptions};
-use parry3d_f64::shape::TriMesh;
+use parry3d_f64::query::{Ray, RayCast};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{RngCore, SeedableRng};
 use rayon::prelude::*;
 
 use crate::depth::View;
 use crate::error::{MapError, Result};
+use crate::exact::{Pair, span};
 use crate::generate::{pose_values, rotation};
 use crate::map::{FtMap, NCH};
 use crate::mesh::Mesh;
@@ -27,13 +27,6 @@ pub const REQUIRED_SHARE: f64 = 0.999;
 /// pixel is sampled more coarsely (the centroid of a region of many rays is far finer than
 /// their pitch).
 const MAX_RAYS: f64 = 40_000.0;
-/// How far the shape cast may stop short of or past the contact (m): the advance by exact
-/// distances starts this far above where it stopped.
-const CAST_SLACK: f64 = 1e-4;
-/// Distance at which the advance counts as touching (m).
-const CONVERGED: f64 = 1e-9;
-/// Advances at most: a contact at 80 degrees to w closes its gap by 17 % a step.
-const ADVANCES: usize = 200;
 /// Contact rays of the first scan from which its centroid is taken as it is: the
 /// sampling's error of a region's centroid shrinks with the rays inside it.
 const FINE_ENOUGH: usize = 1000;
@@ -216,24 +209,16 @@ fn sample(n: usize, opts: VerifyOptions) -> Vec<usize> {
 /// The two meshes as parry shapes, and what every cell's check shares.
 struct Parts<'a> {
     task: &'a Task,
-    a: TriMesh,
-    b: TriMesh,
+    pair: Pair,
     /// Whether the map's lever point is the contact centroid (the centroid model).
     centroid: bool,
 }
 
 impl<'a> Parts<'a> {
     fn new(task: &'a Task, mesh_a: &Mesh, mesh_b: &Mesh, centroid: bool) -> Result<Self> {
-        let shape = |m: &Mesh| {
-            TriMesh::new(m.vertices.clone(), m.faces.clone()).map_err(|e| MapError::Mesh {
-                path: m.path.clone(),
-                reason: format!("parry cannot build a triangle mesh of it: {e}"),
-            })
-        };
         Ok(Self {
             task,
-            a: shape(mesh_a)?,
-            b: shape(mesh_b)?,
+            pair: Pair::new(mesh_a, mesh_b)?,
             centroid,
         })
     }
@@ -254,8 +239,8 @@ impl<'a> Parts<'a> {
             Translation3::from(t_obj),
             UnitQuaternion::from_rotation_matrix(&r2),
         );
-        let a_range = span(&self.a, &Isometry3::identity(), &view.w);
-        let b_range = span(&self.b, &b_pose, &view.w);
+        let a_range = span(&self.pair.a, &Isometry3::identity(), &view.w);
+        let b_range = span(&self.pair.b, &b_pose, &view.w);
         let coords = grid.coords(cell);
         let missed = |what: &str| {
             MapError::Geometry(format!(
@@ -292,10 +277,8 @@ impl<'a> Parts<'a> {
         })
     }
 
-    /// How far A must rise along `w` from its own frame to just touch B at `b_pose`: swept
-    /// against w from clear of B (parry's shape cast, good to some 30 micrometres), then
-    /// advanced by the exact distance between the meshes until it vanishes (a distance
-    /// never exceeds the gap along w, so no step passes the contact).
+    /// How far A must rise along `w` from its own frame to just touch B at `b_pose`:
+    /// lowered along -w onto B from clear of it ([`Pair::travel`]).
     fn touch(
         &self,
         w: &Vector3<f64>,
@@ -305,35 +288,8 @@ impl<'a> Parts<'a> {
     ) -> Option<f64> {
         let lift = (b_range[1] - a_range[0]).max(0.0) + MARGIN;
         let reach = lift + (a_range[1] - b_range[0]).max(0.0) + MARGIN;
-        let at = |h: f64| Isometry3::translation(h * w.x, h * w.y, h * w.z);
-        let hit = query::cast_shapes(
-            &at(lift),
-            &(-w),
-            &self.a,
-            b_pose,
-            &Vector3::zeros(),
-            &self.b,
-            ShapeCastOptions::with_max_time_of_impact(reach),
-        )
-        .ok()??;
-        let distance = |h: f64| query::distance(&at(h), &self.a, b_pose, &self.b).ok();
-        // Clear of B first: where the cast stopped past the contact, back off further.
-        let mut back_off = CAST_SLACK;
-        let mut h = lift - hit.time_of_impact + back_off;
-        let mut d = distance(h)?;
-        while d == 0.0 && back_off < reach {
-            back_off *= 2.0;
-            h = lift - hit.time_of_impact + back_off;
-            d = distance(h)?;
-        }
-        for _ in 0..ADVANCES {
-            if d < CONVERGED {
-                break;
-            }
-            h -= d;
-            d = distance(h)?;
-        }
-        Some(h)
+        let from = Isometry3::translation(lift * w.x, lift * w.y, lift * w.z);
+        Some(lift - self.pair.travel(&from, &(-w), b_pose, reach)?)
     }
 
     /// Centroid (u, v) and mean height along w of the contact region of A risen by `rise`
@@ -349,7 +305,7 @@ impl<'a> Parts<'a> {
         offset: [f64; 2],
         ranges: [[f64; 2]; 2],
     ) -> Option<([f64; 2], f64)> {
-        let a_box = [view.u, view.v].map(|axis| span(&self.a, &Isometry3::identity(), &axis));
+        let a_box = [view.u, view.v].map(|axis| span(&self.pair.a, &Isometry3::identity(), &axis));
         let (lo, hi) = (a_box.map(|r| r[0]), a_box.map(|r| r[1]));
         let rays = Rays {
             parts: self,
@@ -414,7 +370,7 @@ impl Rays<'_> {
                 let (u, v) = (start[0] + i as f64 * pitch, start[1] + j as f64 * pitch);
                 // A's leading surface from below, B's facing one from above.
                 let below = self.view.unproject([u, v, a_range[0] - MARGIN]);
-                let Some(ta) = self.parts.a.cast_ray(
+                let Some(ta) = self.parts.pair.a.cast_ray(
                     &Isometry3::identity(),
                     &Ray::new(below, w),
                     a_range[1] - a_range[0] + 2.0 * MARGIN,
@@ -423,7 +379,7 @@ impl Rays<'_> {
                     continue;
                 };
                 let above = self.view.unproject([u, v, b_range[1] + MARGIN]);
-                let Some(tb) = self.parts.b.cast_ray(
+                let Some(tb) = self.parts.pair.b.cast_ray(
                     self.b_pose,
                     &Ray::new(above, -w),
                     b_range[1] - b_range[0] + 2.0 * MARGIN,
@@ -453,16 +409,4 @@ impl Rays<'_> {
             bounds,
         })
     }
-}
-
-/// Lowest and highest coordinate along `w` of `shape` at `pose` (its bounding box's).
-fn span(shape: &TriMesh, pose: &Isometry3<f64>, w: &Vector3<f64>) -> [f64; 2] {
-    let local = shape.local_aabb();
-    local
-        .vertices()
-        .iter()
-        .map(|c| (pose * c).coords.dot(w))
-        .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], x| {
-            [lo.min(x), hi.max(x)]
-        })
 }

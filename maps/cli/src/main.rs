@@ -376,7 +376,16 @@ fn cmd_generate(
     let task = Task::find(task)?;
     let backend = make_backend(kind, require_gpu)?;
     let grid = task.grid()?;
-    let clearance = task.geometry.as_ref().map(|g| g.clearance());
+    let clearance = match task.fit() {
+        Ok(fit) => Some(fit.clearance()),
+        Err(e) => {
+            eprintln!(
+                "warning: {}: no clearance to check the grid against: {e}",
+                task.name
+            );
+            None
+        }
+    };
     for coarse in too_coarse(&grid, task.depth.pixel, clearance) {
         eprintln!("warning: {}: {coarse}", task.name);
     }

@@ -4,6 +4,7 @@
 //! truth for the map, the FMU and the scene: the file is parsed once, into [`Task`].
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use serde::Deserialize;
 
@@ -12,6 +13,7 @@ use crate::mesh::Mesh;
 
 pub mod cad;
 pub mod dof;
+pub mod fit;
 pub mod omega;
 
 use cad::Geometry;
@@ -427,6 +429,21 @@ impl Task {
         self.geometry.as_ref().ok_or_else(|| MapError::Task {
             path: self.path.clone(),
             reason: "no [geometry] table: its meshes are not generated".into(),
+        })
+    }
+
+    /// How the parts fit ([`fit::Fit`]): from the `[geometry]` where the task has one,
+    /// else measured on its meshes with parry ([`fit::MeshFit`], about a second).
+    ///
+    /// # Errors
+    /// When the meshes cannot be read or do not sit in a fit at the goal.
+    pub fn fit(&self) -> Result<Arc<dyn fit::Fit>> {
+        Ok(match &self.geometry {
+            Some(g) => Arc::new(g.clone()),
+            None => {
+                let pair = crate::exact::Pair::new(&self.part_a.load()?, &self.part_b.load()?)?;
+                Arc::new(fit::MeshFit::measure(self, &pair)?)
+            }
         })
     }
 

@@ -1,0 +1,162 @@
+//! How part A fits into part B: how far off centre part B may sit, direction by direction,
+//! with part A still going in (the insertion limit; its smallest value is the fit's radial
+//! clearance), and how far below part B's top part A sinks on the chamfers at the fit's
+//! edge. A parametric task answers from its dimensions ([`Geometry`]); a task made of
+//! meshes alone from parry's exact queries between them ([`MeshFit`]).
+
+use std::f64::consts::TAU;
+use std::fmt::Debug;
+
+use nalgebra::{Isometry3, Translation3, Vector3};
+
+use crate::depth::View;
+use crate::error::{MapError, Result};
+use crate::exact::{Pair, span};
+use crate::task::Task;
+use crate::task::cad::Geometry;
+
+/// The fit of a task's two parts, in the goal frame's plane across the approach.
+pub trait Fit: Debug + Send + Sync {
+    /// How far part B may sit off centre along `theta` (rad, from the view's u axis: x
+    /// for an approach along -z) with part A still going in (m).
+    fn insertion_limit(&self, theta: f64) -> f64;
+
+    /// How far below part B's top part A's tip rests on the chamfers at the fit's edge (m).
+    fn chamfers(&self) -> f64;
+
+    /// The smallest insertion limit over all directions, the fit's radial clearance (m).
+    fn clearance(&self) -> f64;
+
+    /// Whether part A goes in with part B at `offset` (m) off the TCP: within the
+    /// insertion limit of its direction.
+    fn inserts(&self, offset: [f64; 2]) -> bool {
+        offset[0].hypot(offset[1]) <= self.insertion_limit(offset[1].atan2(offset[0]))
+    }
+
+    /// How far part B may sit off centre along `theta` with part A's tip still landing on a
+    /// chamfer or in the hole (m): the insertion limit widened by the 45-degree chamfers.
+    fn chamfer_reach(&self, theta: f64) -> f64 {
+        self.insertion_limit(theta) * (1.0 + self.chamfers() / self.clearance())
+    }
+}
+
+impl Fit for Geometry {
+    fn insertion_limit(&self, theta: f64) -> f64 {
+        Geometry::insertion_limit(self, theta)
+    }
+
+    fn chamfers(&self) -> f64 {
+        Geometry::chamfers(self)
+    }
+
+    fn clearance(&self) -> f64 {
+        Geometry::clearance(self)
+    }
+}
+
+/// Directions over a full turn at which a mesh fit's insertion limit is measured; it is
+/// interpolated linearly between them.
+pub const DIRECTIONS: usize = 72;
+/// Part A is lifted this far off its seat at the goal before it is moved across (m).
+const LIFT: f64 = 1e-5;
+/// The chamfers' depth is read this far beyond the insertion limit (m).
+const BEYOND: f64 = 1e-6;
+/// ... against part A's height this far beyond it at most (m), resting on part B's top.
+const FAR: f64 = 0.002;
+/// Directions at which the chamfers' depth is read.
+const CHAMFER_DIRECTIONS: usize = 8;
+
+/// The fit of two meshes, measured with parry's exact queries.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshFit {
+    /// Insertion limit at each of [`DIRECTIONS`] directions, the first along u (m).
+    limits: Vec<f64>,
+    /// Depth of the chamfers (m).
+    chamfers: f64,
+}
+
+impl MeshFit {
+    /// The fit of `task`'s parts given as `pair`: part A at the goal (both frames
+    /// coincide), lifted off its seat, moved across the approach until it touches part B,
+    /// in each direction; the chamfers' depth from part A lowered onto part B just beyond the
+    /// insertion limit and farther out.
+    ///
+    /// # Errors
+    /// When part A does not sit at the goal clear of part B (the meshes are not in the
+    /// assembly's coordinates) or can move out of the fit sideways without touching it.
+    pub fn measure(task: &Task, pair: &Pair) -> Result<Self> {
+        let view = View::along(Vector3::from(task.contact.approach));
+        let across = |theta: f64| view.u * theta.cos() + view.v * theta.sin();
+        let seated = Isometry3::from(Translation3::from(view.w * LIFT));
+        let reach = 2.0 * task.omega.size_trans.max(FAR);
+        let err = |reason: String| MapError::Task {
+            path: task.path.clone(),
+            reason,
+        };
+        let limits = (0..DIRECTIONS)
+            .map(|k| {
+                let theta = TAU * k as f64 / DIRECTIONS as f64;
+                // B off along theta is A off along -theta.
+                pair.travel(&seated, &-across(theta), &Isometry3::identity(), reach)
+                    .ok_or_else(|| {
+                        err(format!(
+                            "part A at the goal, lifted {} µm, moves {:.1} mm across the approach at {:.0}° without touching part B: the meshes must be in the assembly's coordinates (part A's frame on part B's at the goal) and part A must sit in a fit",
+                            LIFT * 1e6,
+                            reach * 1e3,
+                            theta.to_degrees()
+                        ))
+                    })
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        let height = |offset: Vector3<f64>| -> Result<f64> {
+            let b_pose = Isometry3::from(Translation3::from(offset));
+            let (a_range, b_range) = (
+                span(&pair.a, &Isometry3::identity(), &view.w),
+                span(&pair.b, &b_pose, &view.w),
+            );
+            let lift = (b_range[1] - a_range[0]).max(0.0) + FAR;
+            let from = Isometry3::from(Translation3::from(view.w * lift));
+            let reach = lift + (a_range[1] - b_range[0]).max(0.0) + FAR;
+            pair.travel(&from, &-view.w, &b_pose, reach)
+                .map(|t| lift - t)
+                .ok_or_else(|| {
+                    err("part A lowered along the approach beside the fit misses part B".into())
+                })
+        };
+        let mut chamfers: f64 = 0.0;
+        for k in 0..CHAMFER_DIRECTIONS {
+            let theta = TAU * k as f64 / CHAMFER_DIRECTIONS as f64;
+            let limit = interpolate(&limits, theta);
+            let far = height(across(theta) * (limit + FAR.min(task.omega.size_trans)))?;
+            let edge = height(across(theta) * (limit + BEYOND))?;
+            chamfers = chamfers.max(far - edge);
+        }
+        // A step this small is the edge's own rounding, not a chamfer.
+        if chamfers < task.depth.tolerance {
+            chamfers = 0.0;
+        }
+        Ok(Self { limits, chamfers })
+    }
+}
+
+/// `values` at [`DIRECTIONS`] even directions interpolated linearly at `theta`.
+fn interpolate(values: &[f64], theta: f64) -> f64 {
+    let n = values.len();
+    let x = theta.rem_euclid(TAU) / TAU * n as f64;
+    let (k, t) = (x.floor() as usize % n, x.fract());
+    values[k] * (1.0 - t) + values[(k + 1) % n] * t
+}
+
+impl Fit for MeshFit {
+    fn insertion_limit(&self, theta: f64) -> f64 {
+        interpolate(&self.limits, theta)
+    }
+
+    fn chamfers(&self) -> f64 {
+        self.chamfers
+    }
+
+    fn clearance(&self) -> f64 {
+        self.limits.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+}
