@@ -154,6 +154,11 @@ enum Cmd {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Makes tasks from a user's meshes.
+    Task {
+        #[command(subcommand)]
+        cmd: TaskCmd,
+    },
     /// Writes (or with --check, verifies) the STL meshes of tasks from their [geometry] tables.
     Cad {
         /// Task name or `all`.
@@ -162,6 +167,48 @@ enum Cmd {
         #[arg(long)]
         check: bool,
     },
+}
+
+#[derive(Subcommand)]
+enum TaskCmd {
+    /// Writes a task folder from two STL files in the assembly's coordinates (part A where it
+    /// sits when assembled): the meshes, checked and copied, and a commented task.toml whose
+    /// settings come from the geometry (sensor above part A, Omega as wide as part A, the
+    /// pixel from the fit's clearance measured on the meshes).
+    New {
+        /// STL of part A, the gripped part; its frame is the task frame (the TCP).
+        #[arg(long)]
+        part_a: PathBuf,
+        /// STL of part B, the fixed part; its frame is the goal frame.
+        #[arg(long)]
+        part_b: PathBuf,
+        /// The STL files' length unit.
+        #[arg(long, value_enum)]
+        units: UnitsArg,
+        /// The task folder to write; its name is the task's.
+        #[arg(long)]
+        out: PathBuf,
+        /// Approach vector `x,y,z` (task frame).
+        #[arg(long, value_delimiter = ',', num_args = 3, default_values_t = [0.0, 0.0, -1.0], allow_hyphen_values = true)]
+        approach: Vec<f64>,
+        /// Force pressed along the approach at each contact (N).
+        #[arg(long, default_value_t = 50.0)]
+        force: f64,
+        /// Friction coefficient between the parts.
+        #[arg(long, default_value_t = 0.3)]
+        friction: f64,
+        /// Omega's translational bound (m; default: part A's half-width rounded up to 0.5 mm).
+        #[arg(long)]
+        omega: Option<f64>,
+    },
+}
+
+/// A mesh file's length unit.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum UnitsArg {
+    M,
+    Mm,
+    In,
 }
 
 fn parse_shard(s: &str) -> Result<[usize; 2], String> {
@@ -220,6 +267,32 @@ fn main() -> Result<()> {
         Cmd::Merge { shards, out } => cmd_merge(&shards, &out),
         Cmd::Vision { task, out } => cmd_vision(&task, &out),
         Cmd::Cad { task, check } => cmd_cad(&task, check),
+        Cmd::Task {
+            cmd:
+                TaskCmd::New {
+                    part_a,
+                    part_b,
+                    units,
+                    out,
+                    approach,
+                    force,
+                    friction,
+                    omega,
+                },
+        } => cmd_task_new(&ftmap::task::create::NewTask {
+            part_a,
+            part_b,
+            units: match units {
+                UnitsArg::M => ftmap::task::Units::M,
+                UnitsArg::Mm => ftmap::task::Units::Mm,
+                UnitsArg::In => ftmap::task::Units::In,
+            },
+            out,
+            approach: [approach[0], approach[1], approach[2]],
+            force,
+            friction,
+            size: omega,
+        }),
         Cmd::Verify {
             file,
             task,
@@ -227,6 +300,25 @@ fn main() -> Result<()> {
             seed,
         } => cmd_verify(&file, task.as_deref(), samples, seed),
     }
+}
+
+fn cmd_task_new(spec: &ftmap::task::create::NewTask) -> Result<()> {
+    use ftmap::task::fit::Fit;
+    let (task, fit) = ftmap::task::create::create(spec)?;
+    for part in [&task.part_a, &task.part_b] {
+        load_part(part)?;
+    }
+    println!(
+        "{}: clearance {:.4} mm, chamfers {:.3} mm; Omega ± {} mm at {} mm, pixel {} mm -> {}",
+        task.name,
+        fit.clearance() * 1e3,
+        fit.chamfers() * 1e3,
+        task.omega.size_trans * 1e3,
+        task.omega.delta_trans * 1e3,
+        task.depth.pixel * 1e3,
+        task.path.display()
+    );
+    Ok(())
 }
 
 /// A task's part, its mesh's warnings printed.

@@ -17,7 +17,7 @@ use crate::task::omega::Grid;
 /// Share by which a pixel or step may exceed the gap before it counts as coarse: a meshed
 /// circle's facets shave the clearance by a fraction of a percent, and a pixel equal to the
 /// nominal gap resolves it.
-const SLACK: f64 = 0.01;
+pub(crate) const SLACK: f64 = 0.01;
 
 /// A resolution of a map that is too coarse for the fit's clearance.
 #[derive(Debug, Clone, Copy, PartialEq)]

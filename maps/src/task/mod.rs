@@ -12,6 +12,7 @@ use crate::error::{MapError, Result};
 use crate::mesh::Mesh;
 
 pub mod cad;
+pub mod create;
 pub mod dof;
 pub mod fit;
 pub mod omega;
