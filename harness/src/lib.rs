@@ -21,6 +21,7 @@ pub mod calibration;
 pub mod camera;
 pub mod campaign;
 pub mod compare;
+pub mod decompose;
 pub mod error;
 pub mod eye;
 pub mod fmu_driver;

@@ -127,6 +127,8 @@ pub enum Outline {
     Circle(f64),
     /// A convex polygon centred on the axis, counter-clockwise (m).
     Polygon(Vec<[f64; 2]>),
+    /// Any simple polygon, counter-clockwise (m): a face's boundary read from a mesh.
+    Loop(Vec<[f64; 2]>),
 }
 
 impl Outline {
@@ -143,6 +145,22 @@ impl Outline {
                     ((p[0] - a[0]) * -ey + (p[1] - a[1]) * ex) / len
                 })
                 .fold(f64::INFINITY, f64::min),
+            Self::Loop(v) => {
+                let (mut nearest, mut inside) = (f64::INFINITY, false);
+                for i in 0..v.len() {
+                    let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+                    let t = (((p[0] - a[0]) * ex + (p[1] - a[1]) * ey) / (ex * ex + ey * ey))
+                        .clamp(0.0, 1.0);
+                    nearest = nearest.min((p[0] - a[0] - t * ex).hypot(p[1] - a[1] - t * ey));
+                    if (a[1] > p[1]) != (b[1] > p[1])
+                        && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * ex
+                    {
+                        inside = !inside;
+                    }
+                }
+                if inside { nearest } else { -nearest }
+            }
         }
     }
 
@@ -152,6 +170,18 @@ impl Outline {
         let (v, apothem) = match self {
             Self::Circle(r) => (polygon(*r, CHAMFER_SIDES, 0.0), *r),
             Self::Polygon(v) => (v.clone(), self.inside([0.0, 0.0])),
+            // Each corner moved along its edges' normals (a miter).
+            Self::Loop(v) => {
+                let n = v.len();
+                return (0..n)
+                    .map(|i| {
+                        let [p, q] = [edge_normal(v, (i + n - 1) % n), edge_normal(v, i)];
+                        let (mx, my) = (p[0] + q[0], p[1] + q[1]);
+                        let k = offset * 2.0 / (mx * mx + my * my);
+                        [v[i][0] + k * mx, v[i][1] + k * my]
+                    })
+                    .collect();
+            }
         };
         let s = (apothem + offset) / apothem;
         v.iter().map(|q| [q[0] * s, q[1] * s]).collect()
@@ -161,6 +191,8 @@ impl Outline {
     fn length(&self, offset: f64) -> f64 {
         match self {
             Self::Circle(r) => TAU * (r + offset),
+            // A simple counter-clockwise loop turns once.
+            Self::Loop(v) => perimeter(v) + TAU * offset,
             Self::Polygon(v) => {
                 let scale = (self.inside([0.0, 0.0]) + offset) / self.inside([0.0, 0.0]);
                 (0..v.len())
@@ -205,8 +237,52 @@ impl Outline {
                 }
                 pts
             }
+            Self::Loop(v) => {
+                // Evenly along the loop by arc length, each point along its edge's normal;
+                // one that lands nearer another edge (by a reflex corner) is left out.
+                let total = perimeter(v);
+                let n = (total / pitch).ceil().max(3.0) as usize;
+                let (mut pts, mut edge, mut start) = (Vec::new(), 0, 0.0);
+                for j in 0..n {
+                    let s = total * j as f64 / n as f64;
+                    while s > start + edge_length(v, edge) && edge + 1 < v.len() {
+                        start += edge_length(v, edge);
+                        edge += 1;
+                    }
+                    let (a, b) = (v[edge], v[(edge + 1) % v.len()]);
+                    let t = (s - start) / edge_length(v, edge);
+                    let normal = edge_normal(v, edge);
+                    let d = offset_of(j);
+                    let q = [
+                        a[0] + t * (b[0] - a[0]) + d * normal[0],
+                        a[1] + t * (b[1] - a[1]) + d * normal[1],
+                    ];
+                    if (self.inside(q) + d).abs() <= 0.25 * d.abs() + 1e-9 {
+                        pts.push(q);
+                    }
+                }
+                pts
+            }
         }
     }
+}
+
+/// Length of edge `i` of a closed polygon (m).
+fn edge_length(v: &[[f64; 2]], i: usize) -> f64 {
+    let (a, b) = (v[i], v[(i + 1) % v.len()]);
+    (b[0] - a[0]).hypot(b[1] - a[1])
+}
+
+/// Outward unit normal of edge `i` of a counter-clockwise polygon.
+fn edge_normal(v: &[[f64; 2]], i: usize) -> [f64; 2] {
+    let (a, b) = (v[i], v[(i + 1) % v.len()]);
+    let len = edge_length(v, i);
+    [(b[1] - a[1]) / len, -(b[0] - a[0]) / len]
+}
+
+/// Perimeter of a closed polygon (m).
+fn perimeter(v: &[[f64; 2]]) -> f64 {
+    (0..v.len()).map(|i| edge_length(v, i)).sum()
 }
 
 /// The van der Corput sequence in base 2 at `j`: 0, 1/2, 1/4, 3/4, 1/8, ... (every run of
@@ -402,10 +478,17 @@ pub struct SceneSpec {
     pub mesh_a: String,
     /// Visual mesh of part B.
     pub mesh_b: String,
+    /// The visual meshes' units in metres (A, B).
+    pub mesh_scale: [f64; 2],
     /// Part A's contact face.
     pub face: Face,
+    /// Part A's convex collision hulls besides the bed (chamfers, steps), task frame.
+    pub wedges: Vec<Vec<[f64; 3]>>,
     /// Part B's collision pieces.
     pub pieces: Vec<Piece>,
+    /// How far part B's pieces stray from its mesh where part A can touch it (m), when
+    /// they were made from the mesh.
+    pub deviation: Option<f64>,
     /// Height of part B's top in the goal frame (m): rim contacts settle at this tcp.z.
     pub top: f64,
     /// Sum of the chamfers' legs on part A's tip and part B's mouth (m): part A resting on
@@ -523,12 +606,15 @@ fn pocket(hole: &Outline, chamfer: f64, block: [f64; 3], depth: f64) -> Vec<Piec
 }
 
 impl SceneSpec {
-    /// The scene of a task from its `task.toml`.
+    /// The scene of a task from its `task.toml`: from its `[geometry]` where it has one,
+    /// else from its meshes ([`crate::decompose`]).
     ///
     /// # Errors
-    /// When the task file or its `[geometry]` table is missing or invalid.
+    /// When the task file is invalid, or its meshes give no scene within the bound.
     pub fn of_task(task: &Task) -> Result<Self> {
-        let geometry = task.geometry()?.clone();
+        let Some(geometry) = task.geometry.clone() else {
+            return Self::of_meshes(task);
+        };
         let meshes = cad::meshes(&geometry);
         let file = |role| {
             meshes
@@ -657,6 +743,9 @@ impl SceneSpec {
             task: task.name.clone(),
             mesh_a: file(Role::A),
             mesh_b: file(Role::B),
+            mesh_scale: [1.0; 2],
+            deviation: None,
+            wedges: face.wedges(),
             face,
             pieces,
             top,
@@ -665,12 +754,37 @@ impl SceneSpec {
             force: task.contact.force,
             friction: task.contact.friction,
             camera,
-            wrist: std::array::from_fn(|k| {
-                task.dofs().is_ok_and(|dofs| {
-                    dofs.iter()
-                        .any(|d| d.pose == Pose::Object && d.axis == ftmap::Axis::ALL[3 + k])
-                })
-            }),
+            wrist: wrist(task),
+        })
+    }
+
+    /// The scene of a task without `[geometry]`, from its meshes; no camera (the vision
+    /// features come from a `[geometry]`).
+    fn of_meshes(task: &Task) -> Result<Self> {
+        let parts = crate::decompose::mesh_scene(task)?;
+        let dir = task.path.parent().unwrap_or(Path::new("."));
+        let file = |p: &Path| {
+            p.strip_prefix(dir)
+                .unwrap_or(p)
+                .to_string_lossy()
+                .into_owned()
+        };
+        Ok(Self {
+            task: task.name.clone(),
+            mesh_a: file(&task.part_a.mesh),
+            mesh_b: file(&task.part_b.mesh),
+            mesh_scale: [&task.part_a, &task.part_b].map(|p| p.units.metres()),
+            face: parts.face,
+            wedges: parts.wedges,
+            pieces: parts.pieces,
+            deviation: Some(parts.deviation),
+            top: parts.top,
+            chamfers: task.fit()?.chamfers(),
+            sensor_origin: task.contact.sensor_origin,
+            force: task.contact.force,
+            friction: task.contact.friction,
+            camera: None,
+            wrist: wrist(task),
         })
     }
 
@@ -680,12 +794,21 @@ impl SceneSpec {
         let f = |v: f64| fmt_num(v);
         let v3 = |v: [f64; 3]| format!("{} {} {}", f(v[0]), f(v[1]), f(v[2]));
         let damping_xy = 2.0 * (SERVO_KP * CARRIAGE_MASS).sqrt();
-        let (bed, wedges) = (self.face.bed(), self.face.wedges());
+        let (bed, wedges) = (self.face.bed(), &self.wedges);
         let _ = writeln!(
             x,
             "<!-- Generated by `harness scene --task {}` from models_mjcf/{}/task.toml: do not edit. -->",
             self.task, self.task
         );
+        if let Some(d) = self.deviation {
+            let _ = writeln!(
+                x,
+                "<!-- Part B from its mesh: {} convex pieces, within {:.2} µm of the mesh where part A can touch it (bound {} µm). -->",
+                self.pieces.len(),
+                d * 1e6,
+                crate::decompose::BOUND * 1e6
+            );
+        }
         let _ = writeln!(x, "<mujoco model=\"{}\">", self.task);
         let _ = writeln!(
             x,
@@ -717,8 +840,17 @@ impl SceneSpec {
         );
         let _ = writeln!(x, "  </default>");
         let _ = writeln!(x, "  <asset>");
-        let _ = writeln!(x, "    <mesh name=\"visual_a\" file=\"{}\"/>", self.mesh_a);
-        let _ = writeln!(x, "    <mesh name=\"visual_b\" file=\"{}\"/>", self.mesh_b);
+        for (name, file, scale) in [
+            ("visual_a", &self.mesh_a, self.mesh_scale[0]),
+            ("visual_b", &self.mesh_b, self.mesh_scale[1]),
+        ] {
+            let scale = if scale == 1.0 {
+                String::new()
+            } else {
+                format!(" scale=\"{}\"", v3([scale; 3]))
+            };
+            let _ = writeln!(x, "    <mesh name=\"{name}\" file=\"{file}\"{scale}/>");
+        }
         let hull = |name: String, vertices: &[[f64; 3]]| {
             let v: Vec<String> = vertices.iter().map(|&q| v3(q)).collect();
             format!("    <mesh name=\"{name}\" vertex=\"{}\"/>", v.join("  "))
@@ -925,6 +1057,16 @@ impl SceneSpec {
         let _ = writeln!(x, "</mujoco>");
         x
     }
+}
+
+/// Whether the wrist has a hinge about x, y, z: the task's uncertain object rotations.
+fn wrist(task: &Task) -> [bool; 3] {
+    std::array::from_fn(|k| {
+        task.dofs().is_ok_and(|dofs| {
+            dofs.iter()
+                .any(|d| d.pose == Pose::Object && d.axis == ftmap::Axis::ALL[3 + k])
+        })
+    })
 }
 
 /// A number as MJCF text: shortest round-trip form, no exponent surprises.

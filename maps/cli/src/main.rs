@@ -173,7 +173,7 @@ enum Cmd {
 enum TaskCmd {
     /// Writes a task folder from two STL files in the assembly's coordinates (part A where it
     /// sits when assembled): the meshes, checked and copied, and a commented task.toml whose
-    /// settings come from the geometry (sensor above part A, Omega as wide as part A, the
+    /// settings come from the geometry (sensor above part A, Omega as wide as part A or part B's top, the
     /// pixel from the fit's clearance measured on the meshes).
     New {
         /// STL of part A, the gripped part; its frame is the task frame (the TCP).
@@ -197,7 +197,7 @@ enum TaskCmd {
         /// Friction coefficient between the parts.
         #[arg(long, default_value_t = 0.3)]
         friction: f64,
-        /// Omega's translational bound (m; default: part A's half-width rounded up to 0.5 mm).
+        /// Omega's translational bound (m; default: part A's half-width, or part B's top's radius where less, rounded up to 0.5 mm).
         #[arg(long)]
         omega: Option<f64>,
     },
@@ -309,7 +309,7 @@ fn cmd_task_new(spec: &ftmap::task::create::NewTask) -> Result<()> {
         load_part(part)?;
     }
     println!(
-        "{}: clearance {:.4} mm, chamfers {:.3} mm; Omega ± {} mm at {} mm, pixel {} mm -> {}",
+        "{}: clearance {:.4} mm, chamfers {:.3} mm; Omega ± {:.3} mm at {:.3} mm, pixel {:.3} mm -> {}",
         task.name,
         fit.clearance() * 1e3,
         fit.chamfers() * 1e3,

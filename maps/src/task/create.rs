@@ -1,6 +1,6 @@
 //! A task from two meshes (`ftmap task new`): the meshes copied into the task's folder and
 //! a `task.toml` beside them whose settings come from the geometry: the sensor above part
-//! A, Omega as wide as part A, the pixel from the fit's clearance measured with parry.
+//! A, Omega as wide as part A or part B's top, the pixel from the fit's clearance measured with parry.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -18,7 +18,8 @@ use crate::task::{Task, Units};
 
 /// The sensor sits this far above part A's highest point (m).
 const SENSOR_ABOVE: f64 = 0.02;
-/// Omega's translational bound is part A's half-width rounded up to this (m).
+/// Omega's translational bound is part A's half-width, or the radius of part B's highest
+/// level where that is less, rounded up to this (m).
 const SIZE_ROUNDING: f64 = 0.0005;
 /// Omega's translational step unless the pixel is wider (m).
 const STEP: f64 = 0.0001;
@@ -102,9 +103,24 @@ pub fn create(spec: &NewTask) -> Result<(Task, MeshFit)> {
         })
         .into_iter()
         .fold(0.0, f64::max);
+    // Where part B's highest level lies (the hole's rim, the shaft's or seat's top): part
+    // A over it touches the feature that the fit is about.
+    let coords = |v: &nalgebra::Point3<f64>| view.project(v);
+    let highest = mesh_b
+        .vertices
+        .iter()
+        .map(|v| coords(v)[2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let top_width = mesh_b
+        .vertices
+        .iter()
+        .map(coords)
+        .filter(|c| highest - c[2] <= 1e-9)
+        .map(|c| c[0].hypot(c[1]))
+        .fold(0.0, f64::max);
     let size = spec
         .size
-        .unwrap_or((half_width / SIZE_ROUNDING - 1e-9).ceil() * SIZE_ROUNDING);
+        .unwrap_or((half_width.min(top_width) / SIZE_ROUNDING - 1e-9).ceil() * SIZE_ROUNDING);
     let top_a = span(&pair.a, &Isometry3::identity(), &view.w)[1];
     // To the micrometre: the meshes' single precision is no part of the design.
     let sensor = (view.w * (top_a + SENSOR_ABOVE)).map(|c| (c * 1e6).round() / 1e6 + 0.0);
@@ -138,7 +154,8 @@ pub fn create(spec: &NewTask) -> Result<(Task, MeshFit)> {
             force: spec.force,
             friction: spec.friction,
             sensor: [sensor.x, sensor.y, sensor.z],
-            size: (size / step).round().max(1.0) * step,
+            // A whole number of steps, to the nanometre (no 0.011000000000000001).
+            size: ((size / step).round().max(1.0) * step * 1e9).round() / 1e9,
             step,
             pixel,
             tolerance: TOLERANCE.min(pixel / 2.0),
@@ -241,7 +258,7 @@ fn text(d: &Draft) -> String {
     let _ = writeln!(t, "[omega]\ngrip = []\nobject = [\"x\", \"y\"]");
     let _ = writeln!(
         t,
-        "size_trans = {:?} # ± {} mm, about part A's half-width",
+        "size_trans = {:?} # ± {} mm: part A's half-width, or part B's top's where less",
         d.size,
         mm(d.size)
     );
