@@ -69,7 +69,11 @@ impl fmt::Display for Defect {
             DefectKind::Duplicate => "duplicate triangles",
             DefectKind::Size => "implausible size",
         };
-        write!(f, "{} {what}", self.count)?;
+        match self.kind {
+            DefectKind::InsideOut => write!(f, "{what} (all {} triangles)", self.count)?,
+            DefectKind::Size => write!(f, "{what}")?,
+            _ => write!(f, "{} {what}", self.count)?,
+        }
         if !self.triangles.is_empty() {
             let list: Vec<String> = self.triangles.iter().map(usize::to_string).collect();
             let more = if self.count > self.triangles.len() {
@@ -174,14 +178,6 @@ pub fn check(vertices: &[Point3<f64>], faces: &[[u32; 3]]) -> (Vec<Defect>, Vec<
             a.dot(&b.cross(&c)) / 6.0
         })
         .sum();
-    if closed && volume <= 0.0 {
-        push(
-            DefectKind::InsideOut,
-            (0..faces.len()).collect(),
-            true,
-            "every normal points inward (the enclosed volume is negative); flip all triangles",
-        );
-    }
     push(
         DefectKind::Degenerate,
         degenerate,
@@ -194,6 +190,17 @@ pub fn check(vertices: &[Point3<f64>], faces: &[[u32; 3]]) -> (Vec<Defect>, Vec<
         false,
         "the copies are dropped",
     );
+    if closed && volume <= 0.0 {
+        defects.push(Defect {
+            kind: DefectKind::InsideOut,
+            count: kept.len(),
+            triangles: Vec::new(),
+            fatal: true,
+            advice:
+                "every normal points inward (the enclosed volume is negative); flip all triangles"
+                    .into(),
+        });
+    }
     if let Some(defect) = size(vertices) {
         defects.push(defect);
     }
