@@ -1,6 +1,7 @@
 //! Mesh validation on real STL files: every committed part passes; a hole in the surface,
 //! a flipped triangle, a degenerate triangle and millimetres read as metres are each
-//! reported by name, with the file and the triangles.
+//! reported by name, with the file and the triangles; parry's half-edge topology of the
+//! same meshes (a second method) agrees on what is closed and what is flipped.
 
 use std::path::{Path, PathBuf};
 
@@ -93,4 +94,71 @@ fn each_defect_is_reported_by_name_with_its_file_and_triangles() {
         .fold(0.0, f64::max);
     assert!(worst < 1e-9, "mm mesh scaled differs by {worst} m");
     std::fs::remove_dir_all(dir).ok();
+}
+
+/// Open half-edges of parry's half-edge topology of `mesh`, or parry's refusal.
+fn parry_open_edges(mesh: &Mesh) -> Result<usize, String> {
+    use parry3d_f64::shape::{TriMesh, TriMeshFlags};
+    // `with_flags` drops a topology error: set the flag afterwards to see it.
+    let mut shape =
+        TriMesh::new(mesh.vertices.clone(), mesh.faces.clone()).map_err(|e| e.to_string())?;
+    shape
+        .set_flags(TriMeshFlags::HALF_EDGE_TOPOLOGY)
+        .map_err(|e| e.to_string())?;
+    let topology = shape.topology().ok_or("no topology")?;
+    Ok(topology
+        .half_edges
+        .iter()
+        .filter(|h| h.twin == u32::MAX)
+        .count())
+}
+
+#[test]
+fn parry_s_half_edge_topology_agrees_with_the_check() {
+    let sound = peg();
+    let mesh = |triangles: &[[[f32; 3]; 3]]| {
+        let v: Vec<nalgebra::Point3<f64>> = triangles
+            .iter()
+            .flatten()
+            .map(|c| nalgebra::Point3::from(c.map(f64::from)))
+            .collect();
+        // Corners merged as the loader does, by their bits.
+        let mut index = std::collections::HashMap::new();
+        let mut vertices = Vec::new();
+        let faces: Vec<[u32; 3]> = v
+            .chunks(3)
+            .map(|t| {
+                [0, 1, 2].map(|k| {
+                    let key = t[k].coords.map(f64::to_bits);
+                    *index.entry(key).or_insert_with(|| {
+                        vertices.push(t[k]);
+                        vertices.len() as u32 - 1
+                    })
+                })
+            })
+            .collect();
+        Mesh::from_parts(vertices, faces)
+    };
+    // Sound: parry builds a closed topology; the check finds nothing.
+    let m = mesh(&sound);
+    assert_eq!(parry_open_edges(&m), Ok(0));
+    assert!(
+        ftmap::mesh::check::check(&m.vertices, &m.faces)
+            .0
+            .is_empty()
+    );
+    // A hole: parry's open half-edges are the check's open edges.
+    let mut holed = sound.clone();
+    holed.remove(7);
+    let m = mesh(&holed);
+    let (defects, _) = ftmap::mesh::check::check(&m.vertices, &m.faces);
+    assert_eq!(parry_open_edges(&m), Ok(defects[0].count));
+    // A flipped triangle: parry refuses the orientation, the check names it.
+    let mut flipped = sound;
+    flipped[7].swap(1, 2);
+    let m = mesh(&flipped);
+    let e = parry_open_edges(&m).expect_err("parry refuses");
+    assert!(e.contains("orientation"), "{e}");
+    let (defects, _) = ftmap::mesh::check::check(&m.vertices, &m.faces);
+    assert_eq!(defects[0].kind, ftmap::mesh::check::DefectKind::Flipped);
 }
