@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 
-use crate::depth::{DepthBackend, PixelWindow, RenderJob, Shift, Surface, View};
+use crate::depth::{ContactSummary, DepthBackend, PixelWindow, RenderJob, Shift, Surface, View};
 use crate::error::{MapError, Result};
 use crate::exact::Pair;
 use crate::map::{FtMap, MapMeta, NCH, SourceMesh};
@@ -113,8 +113,9 @@ pub fn generate(
 }
 
 /// Revision of what a computed map holds, part of the cache key: raise it when a change
-/// to the generator changes the maps (2: the clearance in the metadata; 3: the symmetry).
-const MAP_REVISION: u32 = 3;
+/// to the generator changes the maps (2: the clearance in the metadata; 3: the symmetry;
+/// 4: thin contact regions at a finer pixel).
+const MAP_REVISION: u32 = 4;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and
@@ -343,6 +344,24 @@ impl Context<'_> {
             force: self.task.contact.force,
             friction: self.task.contact.friction,
         };
+        // Thin contact regions again at a finer pixel, over their own extent.
+        let fine = Fine {
+            ctx: self,
+            view,
+            poses: [a_pose, b_pose],
+            b_normals: &b_normals,
+        };
+        let contacts: Vec<(ContactSummary, WrenchSetup)> = shifts
+            .par_iter()
+            .zip(summaries)
+            .map(|(shift, c)| {
+                if c.count == 0 || c.count >= THIN {
+                    Ok((c, setup))
+                } else {
+                    fine.contact(&c, *shift, &setup)
+                }
+            })
+            .collect::<Result<_>>()?;
         let s0 = Point3::from(self.task.contact.sensor_origin);
         let out = cells
             .par_iter()
@@ -350,7 +369,7 @@ impl Context<'_> {
                 let k = shifts
                     .binary_search_by_key(&(shift.du, shift.dv), |s| (s.du, s.dv))
                     .expect("every shift is listed");
-                let c = &summaries[k];
+                let (c, setup) = &contacts[k];
                 let sensor = Point3::from(r1.inverse() * (s0 - t1).coords);
                 let cell = self.grid.flat(&idx[..self.grid.ndim()]);
                 let w = setup.wrench(c, self.model, &sensor).ok_or_else(|| {
@@ -369,6 +388,96 @@ impl Context<'_> {
             .collect::<Result<Vec<_>>>()?;
         progress(out.len() as u64);
         Ok(out)
+    }
+}
+
+/// A contact region of fewer pixels than this is computed again [`REFINE`] times finer:
+/// a crescent thinner than a pixel (part A resting on the rim just off the hole) is
+/// sampled by a few pixels along it, and their centroid strays from the region's by up to
+/// a few pixels (`ftmap verify`).
+const THIN: u32 = 200;
+/// How much finer a thin region's pixel is.
+const REFINE: i64 = 4;
+/// Coarse pixels around a thin region's contact pixels that its finer images cover.
+const REFINE_MARGIN: i64 = 2;
+
+/// What a thin contact region's finer computation needs.
+struct Fine<'a> {
+    ctx: &'a Context<'a>,
+    view: View,
+    /// Poses of A and B.
+    poses: [Isometry3<f64>; 2],
+    /// B's triangle normals in view coordinates.
+    b_normals: &'a [[f32; 3]],
+}
+
+impl Fine<'_> {
+    /// The contact `c` of B at `shift` again at [`REFINE`] times finer pixels, over the
+    /// box of its contact pixels grown by [`REFINE_MARGIN`] coarse pixels; with the setup
+    /// of that finer image.
+    fn contact(
+        &self,
+        c: &ContactSummary,
+        shift: Shift,
+        coarse: &WrenchSetup,
+    ) -> Result<(ContactSummary, WrenchSetup)> {
+        let (rows, cols) = c.rows.iter().fold(
+            ([u32::MAX, 0], [u32::MAX, 0]),
+            |(r, k), &(row, first, last)| {
+                (
+                    [r[0].min(row), r[1].max(row)],
+                    [k[0].min(first), k[1].max(last)],
+                )
+            },
+        );
+        let pixel = coarse.pixel / REFINE as f64;
+        let (i0, j0) = coarse.origin;
+        let lo = |origin: i64, first: u32| (origin + i64::from(first) - REFINE_MARGIN) * REFINE;
+        let span = |range: [u32; 2]| {
+            ((i64::from(range[1] - range[0]) + 2 * REFINE_MARGIN + 1) * REFINE) as usize
+        };
+        let a_win = PixelWindow {
+            i0: lo(i0, cols[0]),
+            j0: lo(j0, rows[0]),
+            width: span(cols).next_multiple_of(8),
+            height: span(rows),
+        };
+        let shift = Shift {
+            du: shift.du * REFINE,
+            dv: shift.dv * REFINE,
+        };
+        let b_win = PixelWindow {
+            i0: a_win.i0 - shift.du.abs(),
+            j0: a_win.j0 - shift.dv.abs(),
+            width: a_win.width + 2 * shift.du.unsigned_abs() as usize,
+            height: a_win.height + 2 * shift.dv.unsigned_abs() as usize,
+        };
+        let job = |mesh, pose, surface, window| RenderJob {
+            mesh,
+            pose,
+            view: self.view,
+            surface,
+            window,
+            pixel,
+        };
+        let backend = self.ctx.backend;
+        let a = backend.render(&job(self.ctx.mesh_a, self.poses[0], Surface::Bottom, a_win))?;
+        let b = backend.render(&job(self.ctx.mesh_b, self.poses[1], Surface::Top, b_win))?;
+        let tolerance = self.ctx.task.depth.tolerance as f32;
+        let setup = WrenchSetup {
+            origin: (a_win.i0, a_win.j0),
+            pixel,
+            ..*coarse
+        };
+        Ok(
+            match backend
+                .contacts(&a, &b, self.b_normals, &[shift], tolerance)?
+                .pop()
+            {
+                Some(fine) if fine.count > 0 => (fine, setup),
+                _ => (c.clone(), *coarse),
+            },
+        )
     }
 }
 

@@ -27,6 +27,12 @@ pub const REQUIRED_SHARE: f64 = 0.999;
 /// pixel is sampled more coarsely (the centroid of a region of many rays is far finer than
 /// their pitch).
 const MAX_RAYS: f64 = 40_000.0;
+/// A region with more than this share of its rays on its edge has a part a few rays wide:
+/// it is scanned finer too.
+const EDGE_SHARE: f64 = 0.2;
+/// Rays of a finer scan at most: a crescent 8 mm long and 50 micrometres wide holds a few
+/// hundred of them at 25 micrometres.
+const MAX_FINE_RAYS: f64 = 200_000.0;
 /// Contact rays of the first scan from which its centroid is taken as it is: the
 /// sampling's error of a region's centroid shrinks with the rays inside it.
 const FINE_ENOUGH: usize = 1000;
@@ -314,17 +320,36 @@ impl<'a> Parts<'a> {
             rise,
             ranges,
         };
-        let coarse = rays.scan([lo, hi], self.task.depth.pixel, offset)?;
-        if coarse.rays >= FINE_ENOUGH {
+        let coarse = rays.scan([lo, hi], self.task.depth.pixel, offset, MAX_RAYS)?;
+        if coarse.rays >= FINE_ENOUGH && (coarse.edge as f64) < EDGE_SHARE * coarse.rays as f64 {
             return Some((coarse.centroid, coarse.height));
         }
-        let [lo, hi] = coarse.bounds;
-        let fine = rays.scan(
-            [lo.map(|x| x - coarse.pitch), hi.map(|x| x + coarse.pitch)],
-            coarse.pitch / REFINE,
-            offset,
-        )?;
-        Some((fine.centroid, fine.height))
+        // Few rays, or many on the region's edge (a strip a few rays wide somewhere): the
+        // coarse rays miss a crescent's thin tips and a strip's width, so a finer scan, its
+        // box growing on every side its region reaches, up to A's own box.
+        let [found_lo, found_hi] = coarse.bounds;
+        let mut scan_box = [
+            [0, 1].map(|k| (found_lo[k] - coarse.pitch).max(lo[k])),
+            [0, 1].map(|k| (found_hi[k] + coarse.pitch).min(hi[k])),
+        ];
+        loop {
+            let fine = rays.scan(scan_box, coarse.pitch / REFINE, offset, MAX_FINE_RAYS)?;
+            let mut grown = false;
+            for k in 0..2 {
+                let reach = 0.5 * (scan_box[1][k] - scan_box[0][k]);
+                if fine.bounds[0][k] - scan_box[0][k] < 2.0 * fine.pitch && scan_box[0][k] > lo[k] {
+                    scan_box[0][k] = (scan_box[0][k] - reach).max(lo[k]);
+                    grown = true;
+                }
+                if scan_box[1][k] - fine.bounds[1][k] < 2.0 * fine.pitch && scan_box[1][k] < hi[k] {
+                    scan_box[1][k] = (scan_box[1][k] + reach).min(hi[k]);
+                    grown = true;
+                }
+            }
+            if !grown {
+                return Some((fine.centroid, fine.height));
+            }
+        }
     }
 }
 
@@ -350,14 +375,22 @@ struct Scan {
     height: f64,
     /// Lowest and highest (u, v) among them.
     bounds: [[f64; 2]; 2],
+    /// Contact rays with a neighbour on the lattice that is not one.
+    edge: usize,
 }
 
 impl Rays<'_> {
-    /// The contact rays on a lattice of `pitch` (at least, so that no more than
-    /// [`MAX_RAYS`] are cast) over the (u, v) box `[lo, hi]`, `offset` pitches off the
-    /// lattice through the origin; `None` when no ray is in contact.
-    fn scan(&self, [lo, hi]: [[f64; 2]; 2], pitch: f64, offset: [f64; 2]) -> Option<Scan> {
-        let pitch = pitch.max(((hi[0] - lo[0]) * (hi[1] - lo[1]) / MAX_RAYS).sqrt());
+    /// The contact rays on a lattice of `pitch` (at least, so that no more than `max_rays`
+    /// are cast) over the (u, v) box `[lo, hi]`, `offset` pitches off the lattice through
+    /// the origin; `None` when no ray is in contact.
+    fn scan(
+        &self,
+        [lo, hi]: [[f64; 2]; 2],
+        pitch: f64,
+        offset: [f64; 2],
+        max_rays: f64,
+    ) -> Option<Scan> {
+        let pitch = pitch.max(((hi[0] - lo[0]) * (hi[1] - lo[1]) / max_rays).sqrt());
         let start = [0, 1].map(|k| ((lo[k] / pitch).floor() + offset[k]) * pitch);
         let steps = [0, 1].map(|k| ((hi[k] - start[k]) / pitch).ceil().max(0.0) as usize + 1);
         let [a_range, b_range] = self.ranges;
@@ -365,6 +398,7 @@ impl Rays<'_> {
         let w = self.view.w;
         let (mut n, mut sum) = (0usize, [0.0f64; 3]);
         let mut bounds = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
+        let mut hit = vec![false; steps[0] * steps[1]];
         for i in 0..steps[0] {
             for j in 0..steps[1] {
                 let (u, v) = (start[0] + i as f64 * pitch, start[1] + j as f64 * pitch);
@@ -390,6 +424,7 @@ impl Rays<'_> {
                 let h_a = a_range[0] - MARGIN + ta + self.rise;
                 let h_b = b_range[1] + MARGIN - tb;
                 if h_a - h_b <= tolerance {
+                    hit[i * steps[1] + j] = true;
                     n += 1;
                     sum[0] += u;
                     sum[1] += v;
@@ -401,8 +436,17 @@ impl Rays<'_> {
                 }
             }
         }
+        let at = |i: usize, j: usize| i < steps[0] && j < steps[1] && hit[i * steps[1] + j];
+        let edge = (0..steps[0])
+            .flat_map(|i| (0..steps[1]).map(move |j| (i, j)))
+            .filter(|&(i, j)| at(i, j))
+            .filter(|&(i, j)| {
+                i == 0 || j == 0 || !at(i - 1, j) || !at(i + 1, j) || !at(i, j - 1) || !at(i, j + 1)
+            })
+            .count();
         (n > 0).then(|| Scan {
             rays: n,
+            edge,
             pitch,
             centroid: [sum[0] / n as f64, sum[1] / n as f64],
             height: sum[2] / n as f64,
