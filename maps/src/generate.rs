@@ -114,8 +114,8 @@ pub fn generate(
 
 /// Revision of what a computed map holds, part of the cache key: raise it when a change
 /// to the generator changes the maps (2: the clearance in the metadata; 3: the symmetry;
-/// 4: thin contact regions at a finer pixel).
-const MAP_REVISION: u32 = 4;
+/// 4: thin contact regions at a finer pixel; 5: thin by mean width too).
+const MAP_REVISION: u32 = 5;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and
@@ -344,7 +344,11 @@ impl Context<'_> {
             force: self.task.contact.force,
             friction: self.task.contact.friction,
         };
-        // Thin contact regions again at a finer pixel, over their own extent.
+        // Thin contact regions again at a finer pixel, over their own extent; only where
+        // the rotations turn the parts about the approach alone, so that faces facing it
+        // stay parallel: a tilted part touches along an edge, in a band the contact
+        // tolerance draws across the tilt, not in a crescent that the pixel under-samples.
+        let level = [r1 * a0, r2 * a0].iter().all(|a| (a - a0).norm() < 1e-9);
         let fine = Fine {
             ctx: self,
             view,
@@ -355,7 +359,7 @@ impl Context<'_> {
             .par_iter()
             .zip(summaries)
             .map(|(shift, c)| {
-                if c.count == 0 || c.count >= THIN {
+                if !level || c.count == 0 || (c.count >= THIN && c.mean_width() >= THIN_WIDTH) {
                     Ok((c, setup))
                 } else {
                     fine.contact(&c, *shift, &setup)
@@ -391,11 +395,14 @@ impl Context<'_> {
     }
 }
 
-/// A contact region of fewer pixels than this is computed again [`REFINE`] times finer:
-/// a crescent thinner than a pixel (part A resting on the rim just off the hole) is
-/// sampled by a few pixels along it, and their centroid strays from the region's by up to
-/// a few pixels (`ftmap verify`).
+/// A contact region of fewer pixels than this, or narrower than [`THIN_WIDTH`], is
+/// computed again [`REFINE`] times finer: a crescent thinner than a pixel (part A resting
+/// on the rim just off the hole) is sampled by a few pixels along it, and their centroid
+/// strays from the region's by up to a few pixels (`ftmap verify`).
 const THIN: u32 = 200;
+/// Mean width (pixels, [`ContactSummary::mean_width`]) below which a region is thin
+/// however many pixels it has (a crescent along a wide rim).
+const THIN_WIDTH: f64 = 2.0;
 /// How much finer a thin region's pixel is.
 const REFINE: i64 = 4;
 /// Coarse pixels around a thin region's contact pixels that its finer images cover.

@@ -10,6 +10,7 @@ use parry3d_f64::query::{Ray, RayCast};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{RngCore, SeedableRng};
 use rayon::prelude::*;
+use std::collections::BTreeMap;
 
 use crate::depth::View;
 use crate::error::{MapError, Result};
@@ -27,17 +28,22 @@ pub const REQUIRED_SHARE: f64 = 0.999;
 /// pixel is sampled more coarsely (the centroid of a region of many rays is far finer than
 /// their pitch).
 const MAX_RAYS: f64 = 40_000.0;
-/// A region with more than this share of its rays on its edge has a part a few rays wide:
-/// it is scanned finer too.
-const EDGE_SHARE: f64 = 0.2;
-/// Rays of a finer scan at most: a crescent 8 mm long and 50 micrometres wide holds a few
-/// hundred of them at 25 micrometres.
+/// Rays of a finer search at most; past them it starts again twice as coarse.
 const MAX_FINE_RAYS: f64 = 200_000.0;
-/// Contact rays of the first scan from which its centroid is taken as it is: the
-/// sampling's error of a region's centroid shrinks with the rays inside it.
-const FINE_ENOUGH: usize = 1000;
-/// How much finer the second scan of the contact region is than the first.
-const REFINE: f64 = 8.0;
+/// The first scan's centroid is taken as it is when its sampling error (estimated from its
+/// rays on the region's edge) is below this share of the pixel the map is held to.
+const SAMPLING_SHARE: f64 = 0.2;
+/// Rays in a row that a finer search looks past the region's last touching ray: the tips
+/// of a crescent thinner than its pitch touch only now and then along it.
+const REACH: u32 = 3;
+/// How much finer the second search of the contact region is than the first, at least.
+const REFINE: f64 = 2.0;
+/// The rays' lattice is turned about the approach by this angle (rad) against the map's
+/// pixels: its tangent the golden ratio's conjugate, the slope farthest from every ratio of
+/// small integers, so that no edge at a round angle (0, 30, 45, 60, 90 degrees) runs along
+/// its rows and each edge cuts the lattice at every phase (a lattice in phase with a
+/// straight edge puts its whole length up to half a pitch off at once).
+const LATTICE_TURN: f64 = 0.553_574_358_897_045_3;
 /// Clearance between the parts before the sweep, and past each mesh's bounds for rays (m).
 const MARGIN: f64 = 1e-3;
 
@@ -46,7 +52,7 @@ const MARGIN: f64 = 1e-3;
 pub struct VerifyOptions {
     /// Cells to check (all of them when the map has fewer).
     pub samples: usize,
-    /// Seed of the cell sample and of the rays' offset from the pixel lattice.
+    /// Seed of the cell sample and of where each ray lies in its lattice cell.
     pub seed: u64,
 }
 
@@ -154,7 +160,7 @@ pub fn verify(
 }
 
 /// Checks the cells `cells` of `map` against the exact geometry of `meshes` (A, B), the
-/// rays off the pixel lattice by an offset drawn from `seed`; refuses as [`verify`] does.
+/// ray lattices' phases drawn from `seed`; refuses as [`verify`] does.
 pub fn verify_cells(
     map: &FtMap,
     task: &Task,
@@ -182,12 +188,9 @@ pub fn verify_cells(
         }
     }
     let parts = Parts::new(task, mesh_a, mesh_b, meta.model == WrenchModel::Centroid)?;
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x5eed_0ff5);
-    // Off the pixel lattice by a random share of a pixel in each direction (never zero).
-    let offset = [0, 1].map(|_| 0.1 + 0.8 * (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64);
     let checks = cells
         .par_iter()
-        .map(|&cell| parts.check(map, cell, offset))
+        .map(|&cell| parts.check(map, cell, seed))
         .collect::<Result<Vec<_>>>()?;
     Ok(Verification {
         checks,
@@ -229,9 +232,9 @@ impl<'a> Parts<'a> {
         })
     }
 
-    /// The exact contact of `cell` against the map's values there; rays `offset` pixels off
-    /// the lattice.
-    fn check(&self, map: &FtMap, cell: usize, offset: [f64; 2]) -> Result<CellCheck> {
+    /// The exact contact of `cell` against the map's values there; its ray lattices'
+    /// phases drawn from `seed` and the cell.
+    fn check(&self, map: &FtMap, cell: usize, seed: u64) -> Result<CellCheck> {
         let grid = map.grid();
         let mut idx = [0usize; MAX_AXES];
         grid.unflat(cell, &mut idx[..grid.ndim()]);
@@ -261,8 +264,9 @@ impl<'a> Parts<'a> {
         // A contact that no ray along the approach sees (an edge on a wall) is one the
         // z-buffer cannot see either: the map's lever point is nowhere near it.
         let centroid_error = self.centroid.then(|| {
+            let phase = Xoshiro256PlusPlus::seed_from_u64(seed ^ (cell as u64).rotate_left(32));
             let Some((centroid, height)) =
-                self.region(&view, &b_pose, rise, offset, [a_range, b_range])
+                self.region(&view, &b_pose, rise, phase, [a_range, b_range])
             else {
                 return f64::INFINITY;
             };
@@ -300,15 +304,16 @@ impl<'a> Parts<'a> {
 
     /// Centroid (u, v) and mean height along w of the contact region of A risen by `rise`
     /// along w against B at `b_pose`: the rays along w where the gap is within the contact
-    /// tolerance of touching, first at about the pixel over all of A, then [`REFINE`] times
-    /// finer over the region they found (a thin crescent's centroid moves with its
-    /// sampling).
+    /// tolerance of touching, first at about the pixel over all of A; where their centroid
+    /// is not fine enough (few rays, or many on the region's edge: a crescent, a strip a
+    /// few rays wide), again finer over the region itself, grown from them ray by ray (a thin crescent's centroid
+    /// moves with its sampling, and its tips may be thinner than the first rays' pitch).
     fn region(
         &self,
         view: &View,
         b_pose: &Isometry3<f64>,
         rise: f64,
-        offset: [f64; 2],
+        mut phase: Xoshiro256PlusPlus,
         ranges: [[f64; 2]; 2],
     ) -> Option<([f64; 2], f64)> {
         let a_box = [view.u, view.v].map(|axis| span(&self.pair.a, &Isometry3::identity(), &axis));
@@ -319,36 +324,34 @@ impl<'a> Parts<'a> {
             b_pose,
             rise,
             ranges,
+            bounds: [lo, hi],
         };
-        let coarse = rays.scan([lo, hi], self.task.depth.pixel, offset, MAX_RAYS)?;
-        if coarse.rays >= FINE_ENOUGH && (coarse.edge as f64) < EDGE_SHARE * coarse.rays as f64 {
-            return Some((coarse.centroid, coarse.height));
+        let pitch = self
+            .task
+            .depth
+            .pixel
+            .max(((hi[0] - lo[0]) * (hi[1] - lo[1]) / MAX_RAYS).sqrt());
+        let coarse = rays.scan(&Lattice::new(pitch, &mut phase))?;
+        if coarse.sampling_error() < SAMPLING_SHARE * self.task.depth.pixel {
+            return Some(coarse.mean());
         }
-        // Few rays, or many on the region's edge (a strip a few rays wide somewhere): the
-        // coarse rays miss a crescent's thin tips and a strip's width, so a finer scan, its
-        // box growing on every side its region reaches, up to A's own box.
-        let [found_lo, found_hi] = coarse.bounds;
-        let mut scan_box = [
-            [0, 1].map(|k| (found_lo[k] - coarse.pitch).max(lo[k])),
-            [0, 1].map(|k| (found_hi[k] + coarse.pitch).min(hi[k])),
-        ];
+        // Fine enough for half that error: the error goes as the square root of the rays
+        // on the edge (pitch^-1) over the rays (pitch^-2), so as pitch^1.5; at least REFINE
+        // times finer, and coarser again while the region holds more than MAX_FINE_RAYS.
+        let target = 0.5 * SAMPLING_SHARE * self.task.depth.pixel;
+        let mut fine = pitch
+            * (target / coarse.sampling_error())
+                .powf(2.0 / 3.0)
+                .min(1.0 / REFINE);
         loop {
-            let fine = rays.scan(scan_box, coarse.pitch / REFINE, offset, MAX_FINE_RAYS)?;
-            let mut grown = false;
-            for k in 0..2 {
-                let reach = 0.5 * (scan_box[1][k] - scan_box[0][k]);
-                if fine.bounds[0][k] - scan_box[0][k] < 2.0 * fine.pitch && scan_box[0][k] > lo[k] {
-                    scan_box[0][k] = (scan_box[0][k] - reach).max(lo[k]);
-                    grown = true;
-                }
-                if scan_box[1][k] - fine.bounds[1][k] < 2.0 * fine.pitch && scan_box[1][k] < hi[k] {
-                    scan_box[1][k] = (scan_box[1][k] + reach).min(hi[k]);
-                    grown = true;
-                }
+            let lattice = Lattice::new(fine, &mut phase);
+            match rays.flood(&lattice, &coarse.hits) {
+                // No ray of this lattice near the first ones touches: nothing finer to say.
+                Some(found) if found.hits.is_empty() => return Some(coarse.mean()),
+                Some(found) => return Some(found.mean()),
+                None => {}
             }
-            if !grown {
-                return Some((fine.centroid, fine.height));
-            }
+            fine *= 2.0;
         }
     }
 }
@@ -361,96 +364,183 @@ struct Rays<'a> {
     rise: f64,
     /// A's and B's extent along w.
     ranges: [[f64; 2]; 2],
+    /// A's (u, v) box: no ray outside it meets A.
+    bounds: [[f64; 2]; 2],
 }
 
-/// What one scan of rays found in contact.
-struct Scan {
-    /// Rays in contact.
-    rays: usize,
-    /// The rays' pitch (m).
+/// A lattice of rays in (u, v), turned by [`LATTICE_TURN`] and shifted by a random phase.
+struct Lattice {
     pitch: f64,
-    /// Mean (u, v) of the contact rays.
-    centroid: [f64; 2],
-    /// Mean height of A along w at them.
-    height: f64,
-    /// Lowest and highest (u, v) among them.
-    bounds: [[f64; 2]; 2],
+    /// Sine and cosine of the turn.
+    turn: (f64, f64),
+    /// Shift of the lattice in pitches.
+    phase: [f64; 2],
+}
+
+impl Lattice {
+    /// A lattice of `pitch` at a phase drawn from `rng`.
+    fn new(pitch: f64, rng: &mut Xoshiro256PlusPlus) -> Self {
+        Self {
+            pitch,
+            turn: LATTICE_TURN.sin_cos(),
+            phase: [0, 1].map(|_| (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64),
+        }
+    }
+
+    /// The (u, v) of the lattice point (i, j).
+    fn at(&self, [i, j]: [i64; 2]) -> [f64; 2] {
+        let (sin, cos) = self.turn;
+        let [a, b] = [i, j].map(|k| k as f64).map(|k| k * self.pitch);
+        let [a, b] = [
+            a + self.phase[0] * self.pitch,
+            b + self.phase[1] * self.pitch,
+        ];
+        [cos * a - sin * b, sin * a + cos * b]
+    }
+
+    /// The lattice point nearest (u, v).
+    fn nearest(&self, [u, v]: [f64; 2]) -> [i64; 2] {
+        let (sin, cos) = self.turn;
+        let (a, b) = (cos * u + sin * v, -sin * u + cos * v);
+        [(a, 0), (b, 1)].map(|(x, k)| (x / self.pitch - self.phase[k]).round() as i64)
+    }
+}
+
+/// The rays one search found in contact.
+struct Scan {
+    /// Each contact ray's (u, v) and A's height along w there.
+    hits: Vec<([f64; 2], f64)>,
     /// Contact rays with a neighbour on the lattice that is not one.
     edge: usize,
 }
 
+impl Scan {
+    fn rays(&self) -> usize {
+        self.hits.len()
+    }
+
+    /// An estimate of the error of the rays' centroid (m): each ray on the region's edge in
+    /// or out by chance (a variance p (1 - p) of 1/6 on average over where the edge cuts
+    /// its cell), at up to the region's extent from the centroid.
+    fn sampling_error(&self) -> f64 {
+        let ([u, v], _) = self.mean();
+        let extent = self
+            .hits
+            .iter()
+            .map(|([x, y], _)| (x - u).hypot(y - v))
+            .fold(0.0, f64::max);
+        (self.edge as f64 / 6.0).sqrt() * extent / self.rays() as f64
+    }
+
+    /// Mean (u, v) and mean height of the contact rays.
+    fn mean(&self) -> ([f64; 2], f64) {
+        let n = self.hits.len() as f64;
+        let sum = self
+            .hits
+            .iter()
+            .fold([0.0; 3], |s, ([u, v], h)| [s[0] + u, s[1] + v, s[2] + h]);
+        ([sum[0] / n, sum[1] / n], sum[2] / n)
+    }
+}
+
+/// The four lattice neighbours of (i, j).
+fn neighbours([i, j]: [i64; 2]) -> [[i64; 2]; 4] {
+    [[i - 1, j], [i + 1, j], [i, j - 1], [i, j + 1]]
+}
+
 impl Rays<'_> {
-    /// The contact rays on a lattice of `pitch` (at least, so that no more than `max_rays`
-    /// are cast) over the (u, v) box `[lo, hi]`, `offset` pitches off the lattice through
-    /// the origin; `None` when no ray is in contact.
-    fn scan(
-        &self,
-        [lo, hi]: [[f64; 2]; 2],
-        pitch: f64,
-        offset: [f64; 2],
-        max_rays: f64,
-    ) -> Option<Scan> {
-        let pitch = pitch.max(((hi[0] - lo[0]) * (hi[1] - lo[1]) / max_rays).sqrt());
-        let start = [0, 1].map(|k| ((lo[k] / pitch).floor() + offset[k]) * pitch);
-        let steps = [0, 1].map(|k| ((hi[k] - start[k]) / pitch).ceil().max(0.0) as usize + 1);
+    /// A's height along w at (u, v) when the ray there meets both parts with a gap within
+    /// the contact tolerance.
+    fn touch(&self, [u, v]: [f64; 2]) -> Option<f64> {
+        let [lo, hi] = self.bounds;
+        if u < lo[0] || u > hi[0] || v < lo[1] || v > hi[1] {
+            return None;
+        }
         let [a_range, b_range] = self.ranges;
-        let tolerance = self.parts.task.depth.tolerance;
         let w = self.view.w;
-        let (mut n, mut sum) = (0usize, [0.0f64; 3]);
-        let mut bounds = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
-        let mut hit = vec![false; steps[0] * steps[1]];
-        for i in 0..steps[0] {
-            for j in 0..steps[1] {
-                let (u, v) = (start[0] + i as f64 * pitch, start[1] + j as f64 * pitch);
-                // A's leading surface from below, B's facing one from above.
-                let below = self.view.unproject([u, v, a_range[0] - MARGIN]);
-                let Some(ta) = self.parts.pair.a.cast_ray(
-                    &Isometry3::identity(),
-                    &Ray::new(below, w),
-                    a_range[1] - a_range[0] + 2.0 * MARGIN,
-                    false,
-                ) else {
-                    continue;
-                };
-                let above = self.view.unproject([u, v, b_range[1] + MARGIN]);
-                let Some(tb) = self.parts.pair.b.cast_ray(
-                    self.b_pose,
-                    &Ray::new(above, -w),
-                    b_range[1] - b_range[0] + 2.0 * MARGIN,
-                    false,
-                ) else {
-                    continue;
-                };
-                let h_a = a_range[0] - MARGIN + ta + self.rise;
-                let h_b = b_range[1] + MARGIN - tb;
-                if h_a - h_b <= tolerance {
-                    hit[i * steps[1] + j] = true;
-                    n += 1;
-                    sum[0] += u;
-                    sum[1] += v;
-                    sum[2] += h_a;
-                    bounds = [
-                        [bounds[0][0].min(u), bounds[0][1].min(v)],
-                        [bounds[1][0].max(u), bounds[1][1].max(v)],
-                    ];
+        // A's leading surface from below, B's facing one from above.
+        let below = self.view.unproject([u, v, a_range[0] - MARGIN]);
+        let ta = self.parts.pair.a.cast_ray(
+            &Isometry3::identity(),
+            &Ray::new(below, w),
+            a_range[1] - a_range[0] + 2.0 * MARGIN,
+            false,
+        )?;
+        let above = self.view.unproject([u, v, b_range[1] + MARGIN]);
+        let tb = self.parts.pair.b.cast_ray(
+            self.b_pose,
+            &Ray::new(above, -w),
+            b_range[1] - b_range[0] + 2.0 * MARGIN,
+            false,
+        )?;
+        let h_a = a_range[0] - MARGIN + ta + self.rise;
+        let h_b = b_range[1] + MARGIN - tb;
+        (h_a - h_b <= self.parts.task.depth.tolerance).then_some(h_a)
+    }
+
+    /// The contact rays of `lattice` over A's box; `None` when no ray is in contact.
+    fn scan(&self, lattice: &Lattice) -> Option<Scan> {
+        let [lo, hi] = self.bounds;
+        let corners = [lo, [hi[0], lo[1]], [lo[0], hi[1]], hi].map(|c| lattice.nearest(c));
+        let range = |k: usize| {
+            let (min, max) = corners
+                .iter()
+                .fold((i64::MAX, i64::MIN), |(l, h), c| (l.min(c[k]), h.max(c[k])));
+            min - 1..=max + 1
+        };
+        let mut hit = BTreeMap::new();
+        for i in range(0) {
+            for j in range(1) {
+                if let Some(h) = self.touch(lattice.at([i, j])) {
+                    hit.insert([i, j], h);
                 }
             }
         }
-        let at = |i: usize, j: usize| i < steps[0] && j < steps[1] && hit[i * steps[1] + j];
-        let edge = (0..steps[0])
-            .flat_map(|i| (0..steps[1]).map(move |j| (i, j)))
-            .filter(|&(i, j)| at(i, j))
-            .filter(|&(i, j)| {
-                i == 0 || j == 0 || !at(i - 1, j) || !at(i + 1, j) || !at(i, j - 1) || !at(i, j + 1)
-            })
-            .count();
-        (n > 0).then(|| Scan {
-            rays: n,
-            edge,
-            pitch,
-            centroid: [sum[0] / n as f64, sum[1] / n as f64],
-            height: sum[2] / n as f64,
-            bounds,
-        })
+        let found = Scan::of(&hit, lattice);
+        (found.rays() > 0).then_some(found)
+    }
+
+    /// The contact rays of `lattice` reached from those nearest `seeds` through rays no more
+    /// than [`REACH`] apart (none when none touches); `None` when more than
+    /// [`MAX_FINE_RAYS`] rays would be cast.
+    fn flood(&self, lattice: &Lattice, seeds: &[([f64; 2], f64)]) -> Option<Scan> {
+        // Each ray cast: A's height where it touches, and the fewest misses in a row on a
+        // path that reached it from a touching one.
+        let mut seen: BTreeMap<[i64; 2], (Option<f64>, u32)> = BTreeMap::new();
+        let mut todo: Vec<([i64; 2], u32)> = seeds
+            .iter()
+            .map(|(p, _)| (lattice.nearest(*p), 0))
+            .collect();
+        while let Some((k, misses)) = todo.pop() {
+            let touch = match seen.get(&k) {
+                Some(&(_, fewest)) if fewest <= misses => continue,
+                Some(&(touch, _)) => touch,
+                None if seen.len() as f64 >= MAX_FINE_RAYS => return None,
+                None => self.touch(lattice.at(k)),
+            };
+            let misses = if touch.is_some() { 0 } else { misses + 1 };
+            seen.insert(k, (touch, misses));
+            if misses <= REACH {
+                todo.extend(neighbours(k).map(|n| (n, misses)));
+            }
+        }
+        let hit = seen
+            .into_iter()
+            .filter_map(|(k, (touch, _))| Some((k, touch?)))
+            .collect();
+        Some(Scan::of(&hit, lattice))
+    }
+}
+
+impl Scan {
+    /// The scan of the contact rays `hit` (lattice point: A's height) of `lattice`.
+    fn of(hit: &BTreeMap<[i64; 2], f64>, lattice: &Lattice) -> Scan {
+        Scan {
+            hits: hit.iter().map(|(&k, &h)| (lattice.at(k), h)).collect(),
+            edge: hit
+                .keys()
+                .filter(|&&k| neighbours(k).iter().any(|n| !hit.contains_key(n)))
+                .count(),
+        }
     }
 }

@@ -22,10 +22,11 @@ fn computed(name: &str) -> (Task, FtMap, [Mesh; 2]) {
 #[test]
 fn every_task_s_map_holds_the_exact_contact_height_and_mostly_its_centroid() {
     // Measured on 1000 cells each (docs/RESULTS.md): depth exact to 0.01 um on every map of
-    // translations; the lever point within a pixel of the exact centroid in 93-100 % of
-    // the cells (the octagon's strips a pixel or two wide along its flats are
-    // under-resolved by the pixel), so the centroid bound here is today's floor, not the
-    // issue's 99.9 %.
+    // translations; the lever point within a pixel of the exact centroid in 99.1-100 % of
+    // the cells where the parts stay level (the octagon's strips a pixel or two wide along
+    // some flats beside wider ones are under-resolved: 99.4 % of its cells by the closed
+    // form), so the bound here is below the 99.9 %; tilted contacts on a wall are
+    // not seen along the approach at all.
     for name in Task::names() {
         let (task, map, [a, b]) = computed(&name);
         let v = verify(
@@ -47,7 +48,7 @@ fn every_task_s_map_holds_the_exact_contact_height_and_mostly_its_centroid() {
         );
         let centroid = v.centroid_share().expect("centroid maps");
         assert!(
-            centroid >= 0.85,
+            centroid >= if turned { 0.85 } else { 0.95 },
             "{name}: centroid within a pixel in {:.1} %",
             100.0 * centroid
         );

@@ -186,6 +186,38 @@ pub struct ContactSummary {
     pub rows: Vec<(u32, u32, u32)>,
 }
 
+impl ContactSummary {
+    /// The region's mean width in pixels: twice its pixel count over the perimeter of its
+    /// rows' spans, counted in pixel steps (a w x l rectangle along the rows or columns:
+    /// w l / (w + l); a disc of radius r: about 0.8 r). Only each row's first and last
+    /// pixel are known, so pieces side by side in the same rows count as one of their
+    /// rows' extent.
+    pub fn mean_width(&self) -> f64 {
+        let span = |&(_, first, last): &(u32, u32, u32)| f64::from(last - first + 1);
+        let between: f64 = self
+            .rows
+            .iter()
+            .zip(self.rows.iter().skip(1))
+            .map(|(p, q)| {
+                // The edge between two rows' spans: what one has and the other lacks.
+                let shared = if q.0 == p.0 + 1 {
+                    (f64::from(p.2.min(q.2)) - f64::from(p.1.max(q.1)) + 1.0).max(0.0)
+                } else {
+                    0.0
+                };
+                span(p) + span(q) - 2.0 * shared
+            })
+            .sum();
+        let ends = self.rows.first().map_or(0.0, span) + self.rows.last().map_or(0.0, span);
+        let perimeter = between + ends + 2.0 * self.rows.len() as f64;
+        if perimeter > 0.0 {
+            2.0 * f64::from(self.count) / perimeter
+        } else {
+            0.0
+        }
+    }
+}
+
 /// Renders depth images and reduces shifted image pairs to contact summaries.
 pub trait DepthBackend: Sync {
     /// Short name for reports (`cpu`, `gpu:<adapter>`).
@@ -205,4 +237,52 @@ pub trait DepthBackend: Sync {
         shifts: &[Shift],
         tolerance: f32,
     ) -> Result<Vec<ContactSummary>>;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ContactSummary;
+
+    /// The summary of the pixels for which `inside(row, col)` holds in a 200 x 200 image.
+    fn region(inside: impl Fn(u32, u32) -> bool) -> ContactSummary {
+        let mut c = ContactSummary {
+            gap: 0.0,
+            count: 0,
+            sum_col: 0.0,
+            sum_row: 0.0,
+            sum_height: 0.0,
+            sum_normal: [0.0; 3],
+            rows: Vec::new(),
+        };
+        for row in 0..200 {
+            let cols: Vec<u32> = (0..200).filter(|&col| inside(row, col)).collect();
+            if let (Some(&first), Some(&last)) = (cols.first(), cols.last()) {
+                c.count += cols.len() as u32;
+                c.rows.push((row, first, last));
+            }
+        }
+        c
+    }
+
+    #[test]
+    fn the_mean_width_of_rectangles_and_a_disc_is_their_width() {
+        // A w x l rectangle: twice w l over its perimeter 2 (w + l).
+        let rectangle = |w: f64, l: f64| w * l / (w + l);
+        let across = region(|row, col| (50..150).contains(&col) && (20..23).contains(&row));
+        let along = region(|row, col| (50..150).contains(&row) && (20..23).contains(&col));
+        for strip in [across, along] {
+            assert!((strip.mean_width() - rectangle(3.0, 100.0)).abs() < 1e-9);
+        }
+        // A strip broken in two along its length: as wide as each piece.
+        let broken = region(|row, col| {
+            (20..22).contains(&col) && [50..90, 110..150].iter().any(|r| r.contains(&row))
+        });
+        assert!((broken.mean_width() - rectangle(2.0, 40.0)).abs() < 1e-9);
+        // A disc: its staircase outline is as long as its bounding square's.
+        let r = 40.0;
+        let disc = region(|row, col| (f64::from(row) - 100.0).hypot(f64::from(col) - 100.0) < r);
+        let expected = std::f64::consts::FRAC_PI_4 * r;
+        assert!((disc.mean_width() - expected).abs() < 0.05 * expected);
+        assert_eq!(region(|_, _| false).mean_width(), 0.0);
+    }
 }
