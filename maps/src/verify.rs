@@ -52,7 +52,7 @@ const MARGIN: f64 = 1e-3;
 pub struct VerifyOptions {
     /// Cells to check (all of them when the map has fewer).
     pub samples: usize,
-    /// Seed of the cell sample and of where each ray lies in its lattice cell.
+    /// Seed of the cell sample and of the phases of the rays' lattices.
     pub seed: u64,
 }
 
@@ -306,8 +306,9 @@ impl<'a> Parts<'a> {
     /// along w against B at `b_pose`: the rays along w where the gap is within the contact
     /// tolerance of touching, first at about the pixel over all of A; where their centroid
     /// is not fine enough (few rays, or many on the region's edge: a crescent, a strip a
-    /// few rays wide), again finer over the region itself, grown from them ray by ray (a thin crescent's centroid
-    /// moves with its sampling, and its tips may be thinner than the first rays' pitch).
+    /// few rays wide), again finer over the region itself, grown from them ray by ray (a
+    /// thin crescent's centroid moves with its sampling, and its tips may be thinner than
+    /// the first rays' pitch).
     fn region(
         &self,
         view: &View,
@@ -390,11 +391,7 @@ impl Lattice {
     /// The (u, v) of the lattice point (i, j).
     fn at(&self, [i, j]: [i64; 2]) -> [f64; 2] {
         let (sin, cos) = self.turn;
-        let [a, b] = [i, j].map(|k| k as f64).map(|k| k * self.pitch);
-        let [a, b] = [
-            a + self.phase[0] * self.pitch,
-            b + self.phase[1] * self.pitch,
-        ];
+        let [a, b] = [(i, 0), (j, 1)].map(|(k, d)| (k as f64 + self.phase[d]) * self.pitch);
         [cos * a - sin * b, sin * a + cos * b]
     }
 
@@ -415,6 +412,7 @@ struct Scan {
 }
 
 impl Scan {
+    /// Contact rays found.
     fn rays(&self) -> usize {
         self.hits.len()
     }
