@@ -333,17 +333,15 @@ impl<'a> Parts<'a> {
             .pixel
             .max(((hi[0] - lo[0]) * (hi[1] - lo[1]) / MAX_RAYS).sqrt());
         let coarse = rays.scan(&Lattice::new(pitch, &mut phase))?;
-        if coarse.sampling_error() < SAMPLING_SHARE * self.task.depth.pixel {
+        let error = coarse.sampling_error();
+        if error < SAMPLING_SHARE * self.task.depth.pixel {
             return Some(coarse.mean());
         }
         // Fine enough for half that error: the error goes as the square root of the rays
         // on the edge (pitch^-1) over the rays (pitch^-2), so as pitch^1.5; at least REFINE
         // times finer, and coarser again while the region holds more than MAX_FINE_RAYS.
         let target = 0.5 * SAMPLING_SHARE * self.task.depth.pixel;
-        let mut fine = pitch
-            * (target / coarse.sampling_error())
-                .powf(2.0 / 3.0)
-                .min(1.0 / REFINE);
+        let mut fine = pitch * (target / error).powf(2.0 / 3.0).min(1.0 / REFINE);
         loop {
             let lattice = Lattice::new(fine, &mut phase);
             match rays.flood(&lattice, &coarse.hits) {
@@ -449,7 +447,7 @@ fn neighbours([i, j]: [i64; 2]) -> [[i64; 2]; 4] {
 impl Rays<'_> {
     /// A's height along w at (u, v) when the ray there meets both parts with a gap within
     /// the contact tolerance.
-    fn touch(&self, [u, v]: [f64; 2]) -> Option<f64> {
+    fn height_at(&self, [u, v]: [f64; 2]) -> Option<f64> {
         let [lo, hi] = self.bounds;
         if u < lo[0] || u > hi[0] || v < lo[1] || v > hi[1] {
             return None;
@@ -489,7 +487,7 @@ impl Rays<'_> {
         let mut hit = BTreeMap::new();
         for i in range(0) {
             for j in range(1) {
-                if let Some(h) = self.touch(lattice.at([i, j])) {
+                if let Some(h) = self.height_at(lattice.at([i, j])) {
                     hit.insert([i, j], h);
                 }
             }
@@ -514,7 +512,7 @@ impl Rays<'_> {
                 Some(&(_, fewest)) if fewest <= misses => continue,
                 Some(&(touch, _)) => touch,
                 None if seen.len() as f64 >= MAX_FINE_RAYS => return None,
-                None => self.touch(lattice.at(k)),
+                None => self.height_at(lattice.at(k)),
             };
             let misses = if touch.is_some() { 0 } else { misses + 1 };
             seen.insert(k, (touch, misses));

@@ -470,15 +470,7 @@ fn summarize(
         gap = gap.min(m);
         row_min.push((p, m));
     }
-    let mut out = ContactSummary {
-        gap,
-        count: 0,
-        sum_col: 0.0,
-        sum_row: 0.0,
-        sum_height: 0.0,
-        sum_normal: [0.0; 3],
-        rows: Vec::new(),
-    };
+    let mut out = ContactSummary::none(gap);
     if !gap.is_finite() {
         return out;
     }

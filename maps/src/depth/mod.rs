@@ -187,6 +187,19 @@ pub struct ContactSummary {
 }
 
 impl ContactSummary {
+    /// No contact pixel, with the minimal gap `gap`.
+    pub fn none(gap: f32) -> Self {
+        Self {
+            gap,
+            count: 0,
+            sum_col: 0.0,
+            sum_row: 0.0,
+            sum_height: 0.0,
+            sum_normal: [0.0; 3],
+            rows: Vec::new(),
+        }
+    }
+
     /// The region's mean width in pixels: twice its pixel count over the perimeter of its
     /// rows' spans, counted in pixel steps (a w x l rectangle along the rows or columns:
     /// w l / (w + l); a disc of radius r: about 0.8 r). Only each row's first and last
@@ -245,15 +258,7 @@ mod tests {
 
     /// The summary of the pixels for which `inside(row, col)` holds in a 200 x 200 image.
     fn region(inside: impl Fn(u32, u32) -> bool) -> ContactSummary {
-        let mut c = ContactSummary {
-            gap: 0.0,
-            count: 0,
-            sum_col: 0.0,
-            sum_row: 0.0,
-            sum_height: 0.0,
-            sum_normal: [0.0; 3],
-            rows: Vec::new(),
-        };
+        let mut c = ContactSummary::none(0.0);
         for row in 0..200 {
             let cols: Vec<u32> = (0..200).filter(|&col| inside(row, col)).collect();
             if let (Some(&first), Some(&last)) = (cols.first(), cols.last()) {

@@ -415,15 +415,7 @@ impl GpuBackend {
         shifts: &[Shift],
         tolerance: f32,
     ) -> Result<Vec<ContactSummary>> {
-        let none = ContactSummary {
-            gap: f32::INFINITY,
-            count: 0,
-            sum_col: 0.0,
-            sum_row: 0.0,
-            sum_height: 0.0,
-            sum_normal: [0.0; 3],
-            rows: Vec::new(),
-        };
+        let none = ContactSummary::none(f32::INFINITY);
         if shifts.is_empty() || a.window.is_empty() || b.window.is_empty() {
             return Ok(vec![none; shifts.len()]);
         }
@@ -919,15 +911,7 @@ mod tests {
 
     #[test]
     fn decode_reads_rows_and_no_overlap() {
-        let none = ContactSummary {
-            gap: f32::INFINITY,
-            count: 0,
-            sum_col: 0.0,
-            sum_row: 0.0,
-            sum_height: 0.0,
-            sum_normal: [0.0; 3],
-            rows: vec![],
-        };
+        let none = ContactSummary::none(f32::INFINITY);
         assert_eq!(
             decode(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0], &[0; 4], &none),
             none
