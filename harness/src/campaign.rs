@@ -5,6 +5,8 @@
 
 use std::fmt;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -15,14 +17,14 @@ use ftmap::map::format;
 use ftmap::map::resolution::{Coarse, too_coarse};
 use ftmap::task::fit::Fit;
 use ftmap::task::omega::GridAxis;
-use ftmap::{Axis, Pose, Task};
+use ftmap::{Axis, FtMap, Pose, Task};
 
 use crate::calibration;
 use crate::error::{HarnessError, Result, create_dir};
 use crate::eye::Eye;
 use crate::fmu_driver::{Fmu, Settings, default_fmu_path};
 use crate::plot;
-use crate::report::{self, Summary};
+use crate::report::{self, Pace, Summary};
 use crate::sensor::Noise;
 use crate::sim::Sim;
 use crate::trial::{Strategy, TrialConfig, TrialResult, Truth, Twist, run_trial, spiral};
@@ -31,7 +33,7 @@ use crate::world::{MapWorld, World, WorldKind};
 use model_description::trace;
 
 /// How the FMU evaluates particles by vision (its `vision_method` parameter).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum VisionMethod {
     /// Relative feature distances (section III-B-1).
     Relative,
@@ -51,7 +53,7 @@ impl VisionMethod {
 }
 
 /// The true offsets of a campaign's trials.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Offsets {
     /// `trials` offsets uniform in the square ±`half_width` (m; default Omega's size_trans).
     Random {
@@ -70,7 +72,7 @@ pub enum Offsets {
 }
 
 /// What a campaign runs with (the `trials` and `sweep` commands' settings, SI units).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CampaignOptions {
     /// Task name or task.toml path.
     pub task: String,
@@ -125,6 +127,11 @@ pub struct CampaignOptions {
     pub lost: Option<f64>,
     /// Where the contact motions happen.
     pub world: WorldKind,
+    /// Trials run at once, each worker with its own world, camera and FMU instance
+    /// (default: one per core).
+    pub jobs: Option<usize>,
+    /// Run only shard I of N of the trials (trial i where i mod N = I), for `merge`.
+    pub shard: Option<[usize; 2]>,
 }
 
 /// What setting a campaign up did that its user should hear of, in order.
@@ -169,13 +176,13 @@ impl fmt::Display for SetupNote {
     }
 }
 
-/// The trials a campaign ran and the wall-clock time they took (s).
+/// The trials a campaign ran, and how long they took on how many workers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Outcome {
     /// One result per true offset.
     pub results: Vec<TrialResult>,
-    /// Wall-clock time of the whole campaign (s).
-    pub wall: f64,
+    /// How long they took, on how many workers.
+    pub pace: Pace,
 }
 
 /// A plot a campaign wrote.
@@ -225,58 +232,47 @@ impl fmt::Display for CampaignPlot {
     }
 }
 
-/// A campaign set up and ready to run: the task, its simulation, the trial limits and
-/// settings, the camera and the FMU.
-pub struct Campaign {
-    options: CampaignOptions,
+/// A campaign apart from where it runs: its task and options. It draws the trials' true
+/// offsets and writes the report, of the campaign that ran or of its merged shards.
+pub struct Plan {
     task: Task,
-    world: Box<dyn World>,
-    config: TrialConfig,
-    eye: Option<Eye>,
-    fmu: Option<Fmu>,
+    options: CampaignOptions,
 }
 
-impl Campaign {
-    /// Sets a campaign up: opens the task and its scene, resolves the FT-Map, builds the
-    /// trial limits, opens the camera (writing `<out>/vision.json`) and loads the FMU,
-    /// telling `note` what a user should hear of as it goes.
+impl Plan {
+    /// The plan of `options`.
     ///
     /// # Errors
-    /// When the task, its scene, map, camera or the FMU cannot be had, or the camera is asked
-    /// for with the spiral search.
-    pub fn open(options: CampaignOptions, note: &mut dyn FnMut(SetupNote)) -> Result<Self> {
-        let task = Task::find(&options.task)?;
-        check_dofs(&task, options.vision)?;
-        let map = resolve_map(options.map.as_deref(), &task, note)?;
-        let fit = task.fit()?;
-        let world: Box<dyn World> = match &options.world {
-            WorldKind::Mujoco => Box::new(Sim::of_task(&task)?),
-            WorldKind::Map(file) => {
-                let file = match file.as_ref().or(map.as_ref()) {
-                    Some(f) => f.clone(),
-                    None => cached_map(&task, note)?,
-                };
-                let (world_map, _) = format::load_any(&file)?;
-                Box::new(MapWorld::new(world_map, fit.clone())?)
-            }
-        };
-        let mut config = trial_config(&options, &task, fit.as_ref(), map)?;
-        let eye = open_eye(&options, &task, &mut config, note)?;
-        let fmu = match options.strategy {
-            Strategy::Pf => {
-                let path = options.fmu.clone().unwrap_or_else(default_fmu_path);
-                Some(Fmu::load(&path)?)
-            }
-            Strategy::Spiral => None,
-        };
+    /// When the task cannot be read.
+    pub fn new(options: CampaignOptions) -> Result<Self> {
         Ok(Self {
+            task: Task::find(&options.task)?,
             options,
-            task,
-            world,
-            config,
-            eye,
-            fmu,
         })
+    }
+
+    /// The task.
+    pub fn task(&self) -> &Task {
+        &self.task
+    }
+
+    /// The options.
+    pub fn options(&self) -> &CampaignOptions {
+        &self.options
+    }
+
+    /// `<out>/trace.csv` (absolute), where the FMU traces a random campaign's first trial.
+    ///
+    /// # Errors
+    /// When the output folder has no absolute path.
+    pub fn trace_file(&self) -> Result<Option<PathBuf>> {
+        match (self.options.strategy, &self.options.offsets) {
+            (Strategy::Pf, Offsets::Random { .. }) => Ok(Some(
+                std::path::absolute(self.options.out.join("trace.csv"))
+                    .map_err(|e| HarnessError::io(&self.options.out, e))?,
+            )),
+            _ => Ok(None),
+        }
     }
 
     /// Half width of the square of true offsets (m).
@@ -289,7 +285,7 @@ impl Campaign {
     /// The true offsets of the trials (m): object offsets as asked, grip offsets uniform
     /// over the task's grip bounds where its grip is uncertain (from a stream of their own,
     /// so that the object offsets of a seed are those of a task without).
-    fn truths(&self) -> Vec<Truth> {
+    pub fn truths(&self) -> Vec<Truth> {
         let size = self.half_width();
         let objects = match self.options.offsets {
             Offsets::Random { trials, .. } => random_offsets(trials, size, self.options.seed),
@@ -323,38 +319,6 @@ impl Campaign {
             .collect()
     }
 
-    /// Runs one trial per true offset, with a progress bar.
-    ///
-    /// # Errors
-    /// When the FMU or rendering fails.
-    pub fn run(&mut self) -> Result<Outcome> {
-        let truths = self.truths();
-        // The FMU appends to its trace: start it afresh.
-        if let Some(file) = &self.config.settings.trace {
-            create_dir(&self.options.out)?;
-            match std::fs::remove_file(file) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                    return Err(HarnessError::io(file, e));
-                }
-                _ => {}
-            }
-        }
-        let (results, wall) = timed(|| {
-            run_campaign(
-                self.world.as_mut(),
-                self.fmu.as_ref(),
-                self.eye.as_mut(),
-                &self.config,
-                &truths,
-                self.options.seed,
-            )
-        });
-        Ok(Outcome {
-            results: results?,
-            wall,
-        })
-    }
-
     /// Writes `<out>/trials.csv`, `measurements.csv`, `first_images.csv` (with a camera: the
     /// estimate after each trial's first image, as measurement 0) and `summary.json`; returns
     /// the summary.
@@ -380,7 +344,7 @@ impl Campaign {
             self.options.sensor_noise,
             self.options.vision,
             &outcome.results,
-            outcome.wall,
+            outcome.pace,
         );
         report::write_summary(&out.join("summary.json"), &summary)?;
         Ok(summary)
@@ -433,13 +397,13 @@ impl Campaign {
     /// # Errors
     /// When the trace cannot be read or the image written.
     fn plot_particles(&self, results: &[TrialResult]) -> Result<Option<PathBuf>> {
-        let (Some(file), Some(first)) = (&self.config.settings.trace, results.first()) else {
+        let (Some(file), Some(first)) = (self.trace_file()?, results.first()) else {
             return Ok(None);
         };
         if first.measurements() == 0 {
             return Ok(None);
         }
-        let text = std::fs::File::open(file).map_err(|e| HarnessError::io(file, e))?;
+        let text = std::fs::File::open(&file).map_err(|e| HarnessError::io(&file, e))?;
         let measurements = trace::read(text).map_err(|e| HarnessError::Invalid {
             what: "trace",
             reason: format!("{}: {e}", file.display()),
@@ -464,6 +428,148 @@ impl Campaign {
         let path = self.options.out.join("particles.png");
         plot::particles(&path, &measurements, &truth)?;
         Ok(Some(path))
+    }
+}
+
+/// A campaign set up and ready to run: the task, its simulation, the trial limits and
+/// settings, the camera and the FMU.
+pub struct Campaign {
+    plan: Plan,
+    /// What each further worker opens its own world from.
+    source: WorldSource,
+    /// The first worker's rig, opened with the campaign (so that it fails early).
+    rig: Rig,
+    config: TrialConfig,
+    fmu: Option<Fmu>,
+}
+
+/// A worker's work cell: the world its trials run in and, with the camera, its eye.
+pub struct Rig {
+    /// Where the contact motions happen.
+    pub world: Box<dyn World>,
+    /// The camera, in experiment D.
+    pub eye: Option<Eye>,
+}
+
+/// What a campaign's worlds are opened from.
+enum WorldSource {
+    /// The task's MuJoCo scene.
+    Mujoco,
+    /// An FT-Map as the world, for parts that fit as `fit` says.
+    Map(Box<FtMap>, Arc<dyn Fit>),
+}
+
+impl WorldSource {
+    /// A new world of this source for `task`.
+    fn open(&self, task: &Task) -> Result<Box<dyn World>> {
+        Ok(match self {
+            Self::Mujoco => Box::new(Sim::of_task(task)?),
+            Self::Map(map, fit) => Box::new(MapWorld::new(FtMap::clone(map), fit.clone())?),
+        })
+    }
+}
+
+impl Campaign {
+    /// Sets a campaign up: opens the task and its scene, resolves the FT-Map, builds the
+    /// trial limits, opens the camera (writing `<out>/vision.json`) and loads the FMU,
+    /// telling `note` what a user should hear of as it goes.
+    ///
+    /// # Errors
+    /// When the task, its scene, map, camera or the FMU cannot be had, or the camera is asked
+    /// for with the spiral search.
+    pub fn open(options: CampaignOptions, note: &mut dyn FnMut(SetupNote)) -> Result<Self> {
+        let plan = Plan::new(options)?;
+        let (task, options) = (&plan.task, &plan.options);
+        check_dofs(task, options.vision)?;
+        let map = resolve_map(options.map.as_deref(), task, note)?;
+        let fit = task.fit()?;
+        let source = match &options.world {
+            WorldKind::Mujoco => WorldSource::Mujoco,
+            WorldKind::Map(file) => {
+                let file = match file.as_ref().or(map.as_ref()) {
+                    Some(f) => f.clone(),
+                    None => cached_map(task, note)?,
+                };
+                let (world_map, _) = format::load_any(&file)?;
+                WorldSource::Map(Box::new(world_map), fit.clone())
+            }
+        };
+        let world = source.open(task)?;
+        let mut config = trial_config(&plan, fit.as_ref(), map)?;
+        let eye = open_eye(options, task, &mut config, note)?;
+        let fmu = match options.strategy {
+            Strategy::Pf => {
+                let path = options.fmu.clone().unwrap_or_else(default_fmu_path);
+                Some(Fmu::load(&path)?)
+            }
+            Strategy::Spiral => None,
+        };
+        Ok(Self {
+            plan,
+            source,
+            rig: Rig { world, eye },
+            config,
+            fmu,
+        })
+    }
+
+    /// What the campaign is: its task and options.
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// Runs the campaign's trials (those of its shard, when it is one) on its workers, with
+    /// a progress bar.
+    ///
+    /// # Errors
+    /// When a worker's world or camera cannot be opened, or the FMU or rendering fails.
+    pub fn run(&mut self) -> Result<Outcome> {
+        let truths = self.plan.truths();
+        let (task, options) = (&self.plan.task, &self.plan.options);
+        // The FMU appends to its trace: start it afresh.
+        if let Some(file) = &self.config.settings.trace {
+            create_dir(&options.out)?;
+            match std::fs::remove_file(file) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(HarnessError::io(file, e));
+                }
+                _ => {}
+            }
+        }
+        let set = TrialSet {
+            truths: &truths,
+            seed: options.seed,
+            shard: options.shard.unwrap_or([0, 1]),
+        };
+        let jobs = options
+            .jobs
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from))
+            .clamp(1, set.indices().len().max(1));
+        let source = &self.source;
+        let open = || -> Result<Rig> {
+            let eye = match options.vision {
+                true => Some(Eye::open(task, options.image_noise, options.detector)?),
+                false => None,
+            };
+            Ok(Rig {
+                world: source.open(task)?,
+                eye,
+            })
+        };
+        let (results, wall) = timed(|| {
+            run_parallel(
+                &mut self.rig,
+                jobs,
+                &open,
+                self.fmu.as_ref(),
+                &self.config,
+                set,
+            )
+        });
+        Ok(Outcome {
+            results: results?,
+            pace: Pace { wall, jobs },
+        })
     }
 }
 
@@ -546,12 +652,8 @@ fn twist_setup(task: &Task, fit: &dyn Fit, map: Option<&Path>) -> Result<Option<
 }
 
 /// The trial limits and FMU settings of a campaign, with the FT-Map file `map`.
-fn trial_config(
-    options: &CampaignOptions,
-    task: &Task,
-    fit: &dyn Fit,
-    map: Option<PathBuf>,
-) -> Result<TrialConfig> {
+fn trial_config(plan: &Plan, fit: &dyn Fit, map: Option<PathBuf>) -> Result<TrialConfig> {
+    let (task, options) = (&plan.task, &plan.options);
     let size = task.omega.size_trans;
     // The spiral's pitch stays below twice the radial clearance.
     let spiral_step = 1.6 * fit.clearance();
@@ -591,13 +693,7 @@ fn trial_config(
             lost: options.lost,
             sigma_vision: options.sigma_vision,
             vision_method: Some(options.vision_method.parameter()),
-            trace: match (options.strategy, &options.offsets) {
-                (Strategy::Pf, Offsets::Random { .. }) => Some(
-                    std::path::absolute(options.out.join("trace.csv"))
-                        .map_err(|e| HarnessError::io(&options.out, e))?,
-                ),
-                _ => None,
-            },
+            trace: plan.trace_file()?,
             ..Settings::default()
         },
     })
@@ -731,48 +827,197 @@ pub fn grid_offsets(k: usize, size: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// Runs one trial per set of true offsets; trial i uses seed `seed + i`; `eye` adds the
-/// camera.
+/// The trials a run takes of a campaign: trial i, with true offsets `truths[i]` and seed
+/// `seed + i`, for each i of shard I of N (i mod N = I; shard 0 of 1 is every trial).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrialSet<'a> {
+    /// The true offsets of the whole campaign's trials.
+    pub truths: &'a [Truth],
+    /// The campaign's seed.
+    pub seed: u64,
+    /// Shard I of N.
+    pub shard: [usize; 2],
+}
+
+impl<'a> TrialSet<'a> {
+    /// Every trial of `truths`.
+    pub fn all(truths: &'a [Truth], seed: u64) -> Self {
+        Self {
+            truths,
+            seed,
+            shard: [0, 1],
+        }
+    }
+
+    /// The indices of the trials taken, ascending.
+    pub fn indices(&self) -> Vec<usize> {
+        let [i, n] = self.shard;
+        (i..self.truths.len()).step_by(n.max(1)).collect()
+    }
+}
+
+/// Runs one trial per set of true offsets, in order, on one world; trial i uses seed
+/// `seed + i`; `eye` adds the camera.
 ///
 /// # Errors
 /// When the FMU or rendering fails.
 pub fn run_campaign(
     sim: &mut dyn World,
     fmu: Option<&Fmu>,
-    mut eye: Option<&mut Eye>,
+    eye: Option<&mut Eye>,
     cfg: &TrialConfig,
     truths: &[Truth],
     seed: u64,
 ) -> Result<Vec<TrialResult>> {
-    let bar = ProgressBar::new(truths.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{prefix} [{bar:30}] {pos}/{len} trials {msg} ({elapsed}, eta {eta})",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    bar.set_prefix(format!("{:?}", cfg.strategy).to_lowercase());
-    let mut results = Vec::with_capacity(truths.len());
-    let mut ok = 0;
-    // The first trial with the trace, if any; the others without.
-    let untraced = TrialConfig {
-        settings: Settings {
-            trace: None,
-            ..cfg.settings.clone()
-        },
-        ..cfg.clone()
-    };
-    for (i, truth) in truths.iter().enumerate() {
-        let c = if i == 0 { cfg } else { &untraced };
-        let r = run_trial(sim, fmu, eye.as_deref_mut(), c, *truth, seed + i as u64)?;
-        ok += usize::from(r.success);
-        results.push(r);
-        bar.set_message(format!("{ok} ok"));
-        bar.inc(1);
+    let queue = Queue::new(TrialSet::all(truths, seed), cfg.strategy);
+    let done = queue.work(sim, fmu, eye, cfg);
+    queue.finish(vec![done])
+}
+
+/// Runs the trials of `set` on `jobs` workers: this thread with `rig`, and `jobs - 1`
+/// threads each with a rig of its own from `open` (a camera's rendering context belongs to
+/// the thread that made it). Each worker takes the next trial not yet taken; a trial resets
+/// its world, so results are those of [`run_campaign`], in trial order.
+///
+/// # Errors
+/// When a worker's rig cannot be opened, or the FMU or rendering fails: the error of the
+/// lowest trial index, after the workers stopped taking trials.
+pub fn run_parallel(
+    rig: &mut Rig,
+    jobs: usize,
+    open: &(dyn Fn() -> Result<Rig> + Sync),
+    fmu: Option<&Fmu>,
+    cfg: &TrialConfig,
+    set: TrialSet,
+) -> Result<Vec<TrialResult>> {
+    let queue = Queue::new(set, cfg.strategy);
+    let done = std::thread::scope(|s| {
+        let workers: Vec<_> = (1..jobs)
+            .map(|_| {
+                let queue = &queue;
+                s.spawn(move || match open() {
+                    Ok(mut r) => queue.work(r.world.as_mut(), fmu, r.eye.as_mut(), cfg),
+                    Err(e) => {
+                        queue.stop();
+                        vec![(0, Err(e))]
+                    }
+                })
+            })
+            .collect();
+        let mut done = vec![queue.work(rig.world.as_mut(), fmu, rig.eye.as_mut(), cfg)];
+        for w in workers {
+            done.push(w.join().unwrap_or_else(|_| {
+                vec![(
+                    0,
+                    Err(HarnessError::Invalid {
+                        what: "campaign",
+                        reason: "a worker thread panicked".into(),
+                    }),
+                )]
+            }));
+        }
+        done
+    });
+    queue.finish(done)
+}
+
+/// The trials of a run handed out to its workers, and their progress bar.
+struct Queue<'a> {
+    set: TrialSet<'a>,
+    indices: Vec<usize>,
+    /// The position in `indices` of the next trial to take.
+    next: AtomicUsize,
+    stopped: AtomicBool,
+    ok: AtomicUsize,
+    bar: ProgressBar,
+}
+
+/// Trial results by trial index, as a worker ran them.
+type Done = Vec<(usize, Result<TrialResult>)>;
+
+impl<'a> Queue<'a> {
+    /// The queue of the trials of `set`, with its progress bar.
+    fn new(set: TrialSet<'a>, strategy: Strategy) -> Self {
+        let indices = set.indices();
+        let bar = ProgressBar::new(indices.len() as u64);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{prefix} [{bar:30}] {pos}/{len} trials {msg} ({elapsed}, eta {eta})",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        bar.set_prefix(format!("{strategy:?}").to_lowercase());
+        Self {
+            set,
+            indices,
+            next: AtomicUsize::new(0),
+            stopped: AtomicBool::new(false),
+            ok: AtomicUsize::new(0),
+            bar,
+        }
     }
-    bar.finish();
-    Ok(results)
+
+    /// No worker takes another trial.
+    fn stop(&self) {
+        self.stopped.store(true, Ordering::Relaxed);
+    }
+
+    /// Takes trials until none is left or a trial failed: trial 0 with `cfg`'s trace, the
+    /// others without.
+    fn work(
+        &self,
+        world: &mut dyn World,
+        fmu: Option<&Fmu>,
+        mut eye: Option<&mut Eye>,
+        cfg: &TrialConfig,
+    ) -> Done {
+        let untraced = TrialConfig {
+            settings: Settings {
+                trace: None,
+                ..cfg.settings.clone()
+            },
+            ..cfg.clone()
+        };
+        let mut done = Vec::new();
+        while !self.stopped.load(Ordering::Relaxed) {
+            let k = self.next.fetch_add(1, Ordering::Relaxed);
+            let Some(&i) = self.indices.get(k) else { break };
+            let c = if i == 0 { cfg } else { &untraced };
+            let truth = self.set.truths[i];
+            let r = run_trial(
+                world,
+                fmu,
+                eye.as_deref_mut(),
+                c,
+                truth,
+                self.set.seed + i as u64,
+            );
+            match &r {
+                Ok(r) => {
+                    let ok = self.ok.fetch_add(usize::from(r.success), Ordering::Relaxed);
+                    self.bar
+                        .set_message(format!("{} ok", ok + usize::from(r.success)));
+                    self.bar.inc(1);
+                }
+                Err(_) => self.stop(),
+            }
+            done.push((i, r));
+        }
+        done
+    }
+
+    /// The workers' results in trial order, or the error of the lowest trial index.
+    fn finish(self, done: Vec<Done>) -> Result<Vec<TrialResult>> {
+        let mut all: Done = done.into_iter().flatten().collect();
+        all.sort_by_key(|(i, _)| *i);
+        let results: Result<Vec<TrialResult>> = all.into_iter().map(|(_, r)| r).collect();
+        match &results {
+            Ok(r) if r.len() == self.indices.len() => self.bar.finish(),
+            _ => self.bar.abandon(),
+        }
+        results
+    }
 }
 
 /// Times a closure (s).

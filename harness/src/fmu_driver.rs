@@ -58,7 +58,7 @@ pub struct Settings {
 }
 
 /// The FMU's estimate after a measurement.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Estimate {
     /// `object.x`, `object.y` (m).
     pub object: [f64; 2],

@@ -10,7 +10,8 @@
 //!   [`eye`], the camera as a trial's second sensor;
 //! - [`fmu_driver`], `FtFusion.fmu` through FMI calls, and [`fmu_log`], what it logged;
 //!   [`trial`], one trial (Algorithm 1 or the spiral search); [`campaign`], campaigns set
-//!   up and run; [`report`], `trials.csv`, `measurements.csv` and `summary.json`;
+//!   up and run on every core; [`shard`], a campaign split over machines and merged;
+//!   [`report`], `trials.csv`, `measurements.csv` and `summary.json`;
 //!   [`table`], many campaigns in one table;
 //!   [`calibration`], whether the reported spread tells the truth; [`plot`], the plots;
 //! - [`boundary`], where the scene accepts part A against the geometry; [`scan`], measured maps; [`compare`], two maps' agreement and two campaigns side by
@@ -33,6 +34,7 @@ pub mod runtime;
 pub mod scan;
 pub mod scene;
 pub mod sensor;
+pub mod shard;
 pub mod sim;
 pub mod table;
 pub mod trial;

@@ -63,6 +63,8 @@ pub struct Summary {
     pub final_errors: Vec<DofError>,
     /// Trials per wall-clock second.
     pub trials_per_second: f64,
+    /// Workers that ran the trials at once.
+    pub jobs: usize,
     /// Simulated time over wall-clock time spent in MuJoCo.
     pub realtime_factor: f64,
     /// Simulated time over the whole wall-clock time of the trials (FMU included).
@@ -262,6 +264,15 @@ fn inserted_by(results: &[TrialResult], kind: impl Fn(&Step) -> bool) -> usize {
         .count()
 }
 
+/// How long a campaign's trials took, on how many workers.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Pace {
+    /// Wall-clock time of the whole campaign (s).
+    pub wall: f64,
+    /// Workers that ran the trials at once.
+    pub jobs: usize,
+}
+
 /// Summarises trial results.
 pub fn summarize(
     task: &Task,
@@ -270,7 +281,7 @@ pub fn summarize(
     sensor_noise: bool,
     vision: bool,
     results: &[TrialResult],
-    wall: f64,
+    pace: Pace,
 ) -> Summary {
     let n = results.len().max(1) as f64;
     let first: Vec<f64> = results.iter().filter_map(first_contact_y_std).collect();
@@ -304,7 +315,8 @@ pub fn summarize(
         final_error_mean: results.iter().map(|r| r.final_error).sum::<f64>() / n,
         final_error_max: results.iter().map(|r| r.final_error).fold(0.0, f64::max),
         final_errors: final_errors(task, results),
-        trials_per_second: results.len() as f64 / wall.max(1e-9),
+        trials_per_second: results.len() as f64 / pace.wall.max(1e-9),
+        jobs: pace.jobs,
         realtime_factor: sim / sim_wall.max(1e-9),
         realtime_factor_overall: sim / trial_wall.max(1e-9),
         sensor_noise,
@@ -443,7 +455,7 @@ impl Summary {
             ),
             (
                 "trials per second",
-                format!("{:.2}", self.trials_per_second),
+                format!("{:.2} ({} workers)", self.trials_per_second, self.jobs),
             ),
             (
                 "real-time factor (MuJoCo / whole loop)",

@@ -21,7 +21,7 @@ use crate::sensor::{Noise, map_wrench};
 use crate::world::World;
 
 /// How the next approach point is chosen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Strategy {
     /// Move to the FMU's estimate after each contact (Algorithm 1).
@@ -220,7 +220,7 @@ impl Truth {
 }
 
 /// One contact motion of a trial.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Step {
     /// Commanded and settled task frame position (m).
     pub tcp: [f64; 3],
@@ -239,7 +239,7 @@ pub struct Step {
 }
 
 /// What a trial ended with.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TrialResult {
     /// True object offset (m).
     pub offset: [f64; 2],
@@ -322,7 +322,6 @@ pub fn run_trial(
     seed: u64,
 ) -> Result<TrialResult> {
     let start = Instant::now();
-    let sim_start = sim.simulated();
     let offset = truth.object;
     sim.set_grip(truth.grip);
     sim.set_object(offset);
@@ -347,6 +346,9 @@ pub fn run_trial(
     let mut steps = Vec::new();
     let mut success = false;
     let mut sim_wall = 0.0;
+    // Summed per trial, not read off the world's running total: a trial's figure does not
+    // depend on what the world simulated before it (on another worker, say).
+    let mut sim_time = 0.0;
     let (mut first_look, mut images_missed) = (None, 0);
     if let (Some(e), Some(eye)) = (estimator.as_mut(), eye.as_deref_mut()) {
         let tcp = [0.0, 0.0, eye.look_height()];
@@ -359,7 +361,7 @@ pub fn run_trial(
             None => images_missed += 1,
         }
     }
-    while steps.len() < cfg.max_contacts && sim.simulated() - sim_start < cfg.max_sim_time {
+    while steps.len() < cfg.max_contacts && sim_time < cfg.max_sim_time {
         if cfg.strategy == Strategy::Spiral {
             match spiral_pts.get(steps.len()) {
                 Some(p) => motion = Motion::Contact(*p),
@@ -377,6 +379,7 @@ pub fn run_trial(
             Motion::Twist(p, from, to) => sim.twist_motion(p, from, to)?,
         };
         sim_wall += t0.elapsed().as_secs_f64();
+        sim_time += c.time;
         let wrench = cfg.noise.apply(map_wrench(c.raw), &mut rng);
         if c.inserted {
             steps.push(Step {
@@ -435,7 +438,7 @@ pub fn run_trial(
         final_error: (last[0] - offset[0]).hypot(last[1] - offset[1]),
         final_rot_error: rotation_error(last_rot, truth.rot, cfg.symmetry),
         wall: start.elapsed().as_secs_f64(),
-        sim_time: sim.simulated() - sim_start,
+        sim_time,
         sim_wall,
         steps,
         first_look,

@@ -12,7 +12,7 @@ use ftmap::{Axis, FtMap, NCH, Pose};
 use crate::error::{HarnessError, Result};
 
 /// Which world a campaign's trials run in.
-#[derive(Debug, Clone, PartialEq, Eq, Default, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum WorldKind {
     /// The task's MuJoCo scene.

@@ -72,6 +72,17 @@ pub enum Command {
         #[arg(long, value_parser = positive)]
         range_mm: Option<f64>,
     },
+    /// The campaign benchmark: the same random trials on one worker, then on `--jobs`
+    /// (default: one per core); prints trials per second of each, the speed-up, whether the
+    /// results agree, and the real-time factor. Writes the two reports under `--out`.
+    Bench {
+        /// Common settings.
+        #[command(flatten)]
+        run: RunArgs,
+        /// Number of trials.
+        #[arg(long, default_value_t = 20, value_parser = count)]
+        trials: usize,
+    },
     /// Trials on a grid of true offsets; plots contacts per offset (the paper's Fig. 10).
     Sweep {
         /// Common settings.
@@ -119,6 +130,16 @@ pub enum Command {
         /// Bar plot of the contacts per trial.
         #[arg(long, default_value = "out/compare_runs.png")]
         plot: PathBuf,
+    },
+    /// Joins the shards of one campaign (`trials --shard I/N`) into the report that one run
+    /// of the whole campaign writes.
+    Merge {
+        /// The shards: `shard.json` files or the folders holding them.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// Output folder of the report.
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Campaigns in one Markdown table (their summary.json): task, DOFs, success, contacts
     /// per trial, the last approach's error per DOF.
@@ -264,6 +285,14 @@ pub struct RunArgs {
     /// measured map (`harness scan`) against the computed one the FMU reads.
     #[arg(long, requires = "world")]
     pub world_map: Option<PathBuf>,
+    /// Trials run at once, each worker with its own world, camera and FMU instance; the
+    /// results are those of a serial run, in trial order (default: one per core).
+    #[arg(long, value_parser = count)]
+    pub jobs: Option<usize>,
+    /// Run only shard I of N of the trials (`I/N`: trial i where i mod N = I) and write
+    /// `shard.json` instead of the report; join the shards with `merge`.
+    #[arg(long, value_parser = ftmap::process::parse_shard)]
+    pub shard: Option<[usize; 2]>,
 }
 
 /// Where a campaign's contact motions happen.
@@ -367,6 +396,8 @@ impl RunArgs {
                 WorldArg::Mujoco => WorldKind::Mujoco,
                 WorldArg::Map => WorldKind::Map(self.world_map),
             },
+            jobs: self.jobs,
+            shard: self.shard,
         }
     }
 }

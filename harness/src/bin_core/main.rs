@@ -8,10 +8,11 @@ mod cli;
 use anyhow::{Context, bail};
 use clap::Parser;
 
-use harness::campaign::{Campaign, CampaignOptions, Offsets};
+use harness::campaign::{Campaign, CampaignOptions, Offsets, Outcome, Plan};
 use harness::compare::{MapComparison, RunsComparison};
 use harness::render::{RenderOptions, View};
 use harness::scan::{ScanOptions, scan_to_file};
+use harness::shard::{self, Shard};
 use harness::{boundary, runtime, scene, sim};
 
 use cli::{Cli, Command, mm};
@@ -74,6 +75,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             trials,
             half_width: range_mm.map(mm),
         }))?,
+        Command::Bench { run, trials } => bench(run.options(Offsets::Random {
+            trials,
+            half_width: None,
+        }))?,
         Command::Sweep {
             run,
             grid,
@@ -109,6 +114,22 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             comparison.plot(&plot)?;
             println!("plot {}", plot.display());
         }
+        Command::Merge { shards, out } => {
+            let shards = shards
+                .iter()
+                .map(|p| Shard::read(p))
+                .collect::<harness::Result<Vec<_>>>()?;
+            let n = shards.len();
+            let (options, outcome, trace) = shard::merge(shards, &out)?;
+            let plan = Plan::new(options)?;
+            if let (Some(text), Some(file)) = (trace, plan.trace_file()?) {
+                std::fs::create_dir_all(&out)
+                    .and_then(|()| std::fs::write(&file, text))
+                    .with_context(|| format!("writing {}", file.display()))?;
+            }
+            println!("merged {n} shards: {} trials", outcome.results.len());
+            report(&plan, &outcome)?;
+        }
         Command::Table { dirs } => {
             print!("{}", harness::table::CampaignTable::read(&dirs)?);
         }
@@ -122,13 +143,99 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Sets a campaign up, runs it, writes its report and plot, printing each step.
+/// Sets a campaign up, runs it, writes its report and plot (a shard: its `shard.json`),
+/// printing each step.
 fn campaign(options: CampaignOptions) -> anyhow::Result<()> {
     let mut campaign = Campaign::open(options, &mut |note| println!("{note}"))?;
     let outcome = campaign.run()?;
-    let summary = campaign.write_report(&outcome)?;
+    let plan = campaign.plan();
+    match plan.options().shard {
+        Some([i, n]) => {
+            let trials = plan.truths().len();
+            let trace = plan.trace_file()?;
+            let file = Shard::of(plan.options(), trials, &outcome, trace.as_deref())?.write()?;
+            println!(
+                "shard {i} of {n}: {} of {trials} trials in {} (join the shards with `harness merge`)",
+                outcome.results.len(),
+                file.display()
+            );
+            Ok(())
+        }
+        None => report(plan, &outcome),
+    }
+}
+
+/// The campaign benchmark: `options` on one worker (in `<out>/serial`), then on its jobs
+/// (in `<out>/parallel`).
+fn bench(options: CampaignOptions) -> anyhow::Result<()> {
+    if options.shard.is_some() {
+        bail!("the benchmark runs the whole campaign: drop --shard");
+    }
+    let run = |name: &str, jobs| -> anyhow::Result<(Outcome, harness::report::Summary)> {
+        let mut campaign = Campaign::open(
+            CampaignOptions {
+                out: options.out.join(name),
+                jobs,
+                ..options.clone()
+            },
+            &mut |_| {},
+        )?;
+        let outcome = campaign.run()?;
+        let summary = campaign.plan().write_report(&outcome)?;
+        Ok((outcome, summary))
+    };
+    let (a, sa) = run("serial", Some(1))?;
+    let (b, sb) = run("parallel", options.jobs)?;
+    let untimed = |o: &Outcome| -> Vec<_> {
+        o.results
+            .iter()
+            .map(|r| harness::trial::TrialResult {
+                wall: 0.0,
+                sim_wall: 0.0,
+                ..r.clone()
+            })
+            .collect()
+    };
+    let same = untimed(&a) == untimed(&b);
+    println!(
+        "campaign benchmark: {}, {} trials (reports in {})",
+        sa.task,
+        a.results.len(),
+        options.out.display()
+    );
+    for (s, label) in [(&sa, "serial"), (&sb, "parallel")] {
+        let realtime = match s.realtime_factor {
+            0.0 => "nothing simulated".to_owned(),
+            f => format!(
+                "real-time factor {f:.1} x in MuJoCo, {:.1} x overall",
+                s.realtime_factor_overall
+            ),
+        };
+        println!(
+            "  {label:<9} {} workers: {:.2} trials/s, {realtime}",
+            s.jobs, s.trials_per_second
+        );
+    }
+    println!(
+        "  speed-up {:.2} x; results {}",
+        sb.trials_per_second / sa.trials_per_second,
+        if same {
+            "identical to the serial run's"
+        } else {
+            "DIFFER from the serial run's"
+        }
+    );
+    if !same {
+        bail!("the parallel run's results differ from the serial run's");
+    }
+    Ok(())
+}
+
+/// Writes a campaign's report and plot, printing its summary.
+fn report(plan: &Plan, outcome: &Outcome) -> anyhow::Result<()> {
+    let summary = plan.write_report(outcome)?;
     println!("{}", summary.table());
-    if let Some(plot) = campaign.plot(&outcome)? {
+    if let Some(plot) = plan.plot(outcome)? {
         println!("{plot}");
     }
     Ok(())

@@ -130,7 +130,7 @@ impl Features {
 }
 
 /// Which line detector finds the edges.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Detector {
     /// Gradient maxima per row or column, fitted and extended (the paper's Fig. 5).
     #[default]

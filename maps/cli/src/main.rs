@@ -69,7 +69,7 @@ enum Cmd {
         #[arg(long)]
         out: PathBuf,
         /// Compute only shard I of N (`I/N`, rotation cells split round-robin); join with `merge`.
-        #[arg(long, value_parser = parse_shard)]
+        #[arg(long, value_parser = ftmap::process::parse_shard)]
         shard: Option<[usize; 2]>,
         /// Fail when the GPU backend finds only a CPU adapter (e.g. lavapipe).
         #[arg(long, env = "FTMAP_REQUIRE_GPU")]
@@ -209,18 +209,6 @@ enum UnitsArg {
     M,
     Mm,
     In,
-}
-
-fn parse_shard(s: &str) -> Result<[usize; 2], String> {
-    let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 0/4")?;
-    let (i, n) = (
-        i.parse::<usize>().map_err(|e| e.to_string())?,
-        n.parse::<usize>().map_err(|e| e.to_string())?,
-    );
-    if n == 0 || i >= n {
-        return Err(format!("shard {i}/{n}: need N >= 1 and 0 <= I < N"));
-    }
-    Ok([i, n])
 }
 
 fn parse_at(s: &str) -> Result<(String, f64), String> {
