@@ -58,7 +58,15 @@ impl DepthBackend for CpuBackend {
                 .min(h - 1);
             let eps = -1e-9 * area.abs();
             for y in ymin..=ymax {
-                for x in xmin..=xmax {
+                // Only the pixels about where the row crosses the triangle: a sliver's box
+                // (a top face fanned from a hole to its corners) is mostly outside it. A
+                // pixel of margin each side; the test below decides as before.
+                let Some([xl, xr]) = row_crossing(&p, y as f64) else {
+                    continue;
+                };
+                let x0 = xmin.max(xl.floor() as i64 - 1);
+                let x1 = xmax.min(xr.ceil() as i64 + 1);
+                for x in x0..=x1 {
                     let q = [x as f64, y as f64, 0.0];
                     let (b0, b1, b2) = (
                         edge(p[1], p[2], q) / area,
@@ -125,6 +133,30 @@ impl DepthBackend for CpuBackend {
         done.sort_unstable_by_key(|(k, _)| *k);
         Ok(done.into_iter().map(|(_, summary)| summary).collect())
     }
+}
+
+/// Where the line at height `y` crosses the triangle `p` in the image plane: the least and
+/// greatest x of its edges' points at that height (`None` where it misses them all).
+fn row_crossing(p: &[[f64; 3]; 3], y: f64) -> Option<[f64; 2]> {
+    let mut range: Option<[f64; 2]> = None;
+    let mut take = |x: f64| {
+        range = Some(match range {
+            Some([l, r]) => [l.min(x), r.max(x)],
+            None => [x, x],
+        });
+    };
+    for k in 0..3 {
+        let (a, b) = (p[k], p[(k + 1) % 3]);
+        if a[1] == b[1] {
+            if a[1] == y {
+                take(a[0]);
+                take(b[0]);
+            }
+        } else if (a[1] - y) * (b[1] - y) <= 0.0 {
+            take(a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]));
+        }
+    }
+    range
 }
 
 /// Twice the signed area of (a, b, c) in the image plane.
@@ -514,6 +546,44 @@ fn summarize(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_row_crossing_holds_every_point_of_the_triangle_on_that_row() {
+        // Slivers, vertices on the row, horizontal edges: every point on row y that is inside
+        // (all three edge functions of one sign) lies within the crossing.
+        let triangles = [
+            [[0.0, 0.0, 0.0], [100.0, 3.0, 0.0], [0.5, 80.0, 0.0]],
+            [[2.0, 5.0, 0.0], [90.0, 5.0, 0.0], [40.0, 5.7, 0.0]],
+            [[10.0, 10.0, 0.0], [10.0, 30.0, 0.0], [10.3, 20.0, 0.0]],
+            [[0.25, 0.0, 0.0], [7.75, 0.0, 0.0], [4.0, 6.0, 0.0]],
+        ];
+        for p in &triangles {
+            let area = edge(p[0], p[1], p[2]);
+            let (lo, hi) = (
+                p.iter().map(|q| q[1]).fold(f64::INFINITY, f64::min),
+                p.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max),
+            );
+            for k in 0..=200 {
+                let y = lo + (hi - lo) * f64::from(k) / 200.0;
+                let [l, r] = row_crossing(p, y).expect("a row within the triangle's height");
+                for i in 0..=2000 {
+                    let q = [-1.0 + 102.0 * f64::from(i) / 2000.0, y, 0.0];
+                    let e = [
+                        edge(p[1], p[2], q),
+                        edge(p[2], p[0], q),
+                        edge(p[0], p[1], q),
+                    ];
+                    if e.iter().all(|v| v * area.signum() >= 0.0) {
+                        assert!(
+                            l - 1e-9 <= q[0] && q[0] <= r + 1e-9,
+                            "{p:?} y {y}: {q:?} outside [{l}, {r}]"
+                        );
+                    }
+                }
+            }
+            assert_eq!(row_crossing(p, hi + 0.5), None);
+        }
+    }
 
     #[test]
     fn sliding_max_equals_the_direct_maximum_of_every_window() {
