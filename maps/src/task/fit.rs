@@ -8,6 +8,7 @@ use std::f64::consts::TAU;
 use std::fmt::Debug;
 
 use nalgebra::{Isometry3, Translation3, Vector3};
+use rayon::prelude::*;
 
 use crate::depth::View;
 use crate::error::{MapError, Result};
@@ -93,7 +94,9 @@ impl MeshFit {
             path: task.path.clone(),
             reason,
         };
+        // Directions are independent: measured on every core.
         let limits = (0..DIRECTIONS)
+            .into_par_iter()
             .map(|k| {
                 let theta = TAU * k as f64 / DIRECTIONS as f64;
                 // B off along theta is A off along -theta.
@@ -123,14 +126,17 @@ impl MeshFit {
                     err("part A lowered along the approach beside the fit misses part B".into())
                 })
         };
-        let mut chamfers: f64 = 0.0;
-        for k in 0..CHAMFER_DIRECTIONS {
-            let theta = TAU * k as f64 / CHAMFER_DIRECTIONS as f64;
-            let limit = interpolate(&limits, theta);
-            let far = height(across(theta) * (limit + FAR.min(task.omega.size_trans)))?;
-            let edge = height(across(theta) * (limit + BEYOND))?;
-            chamfers = chamfers.max(far - edge);
-        }
+        let steps = (0..CHAMFER_DIRECTIONS)
+            .into_par_iter()
+            .map(|k| {
+                let theta = TAU * k as f64 / CHAMFER_DIRECTIONS as f64;
+                let limit = interpolate(&limits, theta);
+                let far = height(across(theta) * (limit + FAR.min(task.omega.size_trans)))?;
+                let edge = height(across(theta) * (limit + BEYOND))?;
+                Ok(far - edge)
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        let mut chamfers = steps.into_iter().fold(0.0, f64::max);
         // A step this small is the edge's own rounding, not a chamfer.
         if chamfers < task.depth.tolerance {
             chamfers = 0.0;
