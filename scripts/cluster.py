@@ -24,10 +24,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def checkout():
+    """The checkout this worker runs in: $FTFUSION_ROOT, else the path of this one."""
+    return Path(os.environ.get("FTFUSION_ROOT", str(ROOT)))
+
+
 def tool(name):
     """The release binary `name` of the checkout this worker runs in."""
-    root = Path(os.environ.get("FTFUSION_ROOT", str(ROOT)))
-    return str(root / "target" / "release" / name)
+    return str(checkout() / "target" / "release" / name)
 
 
 def run_tool(args, cwd):
@@ -43,7 +47,7 @@ def map_shard(task, i, n, extra):
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / f"shard{i}.ftmap"
         run_tool([tool("ftmap"), "generate", "--task", task, "--shard", f"{i}/{n}",
-                  "--out", str(out), *extra], cwd=os.environ.get("FTFUSION_ROOT", str(ROOT)))
+                  "--out", str(out), *extra], cwd=checkout())
         return out.read_bytes()
 
 
@@ -53,7 +57,7 @@ def trials_shard(args, i, n):
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / f"shard{i}"
         run_tool([tool("harness"), "trials", *args, "--shard", f"{i}/{n}", "--out", str(out)],
-                 cwd=os.environ.get("FTFUSION_ROOT", str(ROOT)))
+                 cwd=checkout())
         return (out / "shard.json").read_text()
 
 

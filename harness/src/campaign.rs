@@ -282,6 +282,14 @@ impl Plan {
         half_width.unwrap_or(self.task.omega.size_trans)
     }
 
+    /// Trials of the whole campaign (its shards' together).
+    pub fn trials(&self) -> usize {
+        match self.options.offsets {
+            Offsets::Random { trials, .. } => trials,
+            Offsets::Grid { points, .. } => points * points,
+        }
+    }
+
     /// The true offsets of the trials (m): object offsets as asked, grip offsets uniform
     /// over the task's grip bounds where its grip is uncertain (from a stream of their own,
     /// so that the object offsets of a seed are those of a task without).
@@ -851,9 +859,13 @@ impl<'a> TrialSet<'a> {
 
     /// The indices of the trials taken, ascending.
     pub fn indices(&self) -> Vec<usize> {
-        let [i, n] = self.shard;
-        (i..self.truths.len()).step_by(n.max(1)).collect()
+        shard_indices(self.shard, self.truths.len()).collect()
     }
+}
+
+/// The trial indices of shard I of N of `trials` trials: i mod N = I, ascending.
+pub fn shard_indices([i, n]: [usize; 2], trials: usize) -> impl Iterator<Item = usize> {
+    (i..trials).step_by(n.max(1))
 }
 
 /// Runs one trial per set of true offsets, in order, on one world; trial i uses seed

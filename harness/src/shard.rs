@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::{CampaignOptions, Outcome};
+use crate::campaign::{CampaignOptions, Outcome, Plan, shard_indices};
 use crate::error::{HarnessError, Result, create_dir};
 use crate::report::Pace;
 use crate::trial::TrialResult;
@@ -41,22 +41,17 @@ pub struct Shard {
 }
 
 impl Shard {
-    /// The shard that ran `outcome` of a campaign of `trials` trials with `options` (whose
-    /// `shard` names it); the trace is read from `trace` where the shard ran trial 0.
+    /// The shard of `plan` (its options name it) that ran `outcome`, with the FMU's trace
+    /// where the shard ran trial 0.
     ///
     /// # Errors
     /// When the trace cannot be read.
-    pub fn of(
-        options: &CampaignOptions,
-        trials: usize,
-        outcome: &Outcome,
-        trace: Option<&Path>,
-    ) -> Result<Self> {
-        let shard = options.shard.unwrap_or([0, 1]);
-        let indices = (shard[0]..trials).step_by(shard[1].max(1));
-        let trace = match trace {
+    pub fn of(plan: &Plan, outcome: &Outcome) -> Result<Self> {
+        let options = plan.options();
+        let (shard, trials) = (options.shard.unwrap_or([0, 1]), plan.trials());
+        let trace = match plan.trace_file()? {
             Some(file) if shard[0] == 0 && file.is_file() => {
-                Some(std::fs::read_to_string(file).map_err(|e| HarnessError::io(file, e))?)
+                Some(std::fs::read_to_string(&file).map_err(|e| HarnessError::io(&file, e))?)
             }
             _ => None,
         };
@@ -65,7 +60,9 @@ impl Shard {
             options: options.clone(),
             trials,
             shard,
-            results: indices.zip(outcome.results.iter().cloned()).collect(),
+            results: shard_indices(shard, trials)
+                .zip(outcome.results.iter().cloned())
+                .collect(),
             pace: outcome.pace,
             trace,
         })
@@ -147,6 +144,7 @@ pub fn merge(shards: Vec<Shard>, out: &Path) -> Result<(CampaignOptions, Outcome
             return Err(bad(format!("shard {i}/{n} is given twice")));
         }
         for (k, r) in s.results {
+            // Shard I's trials are those with i mod N = I ([`shard_indices`]).
             if k >= trials || k % n != i {
                 return Err(bad(format!(
                     "shard {i}/{n} holds trial {k}, not one of its own"

@@ -277,6 +277,16 @@ impl TrialResult {
     pub fn measurements(&self) -> usize {
         self.steps.iter().filter(|s| s.estimate.is_some()).count()
     }
+
+    /// The result without its wall-clock times: what a repeated run (on other workers or
+    /// machines) reproduces exactly.
+    pub fn untimed(&self) -> Self {
+        Self {
+            wall: 0.0,
+            sim_wall: 0.0,
+            ..self.clone()
+        }
+    }
 }
 
 /// Points of an Archimedean spiral r = pitch * theta / 2 pi about the origin, spaced about

@@ -46,15 +46,6 @@ fn rig(task: &Task, vision: bool) -> harness::error::Result<Rig> {
     })
 }
 
-/// `results` without their wall-clock times.
-fn untimed(mut results: Vec<TrialResult>) -> Vec<TrialResult> {
-    for r in &mut results {
-        r.wall = 0.0;
-        r.sim_wall = 0.0;
-    }
-    results
-}
-
 /// Serial and parallel (`jobs` workers) results of `trials` trials of `task` (seed 5).
 fn both(task: &Task, trials: usize, jobs: usize, map: Option<&Path>, vision: bool) {
     let fmu = Fmu::load(&default_fmu_path()).unwrap_or_else(|e| panic!("{e}"));
@@ -94,7 +85,8 @@ fn both(task: &Task, trials: usize, jobs: usize, map: Option<&Path>, vision: boo
     let offsets: Vec<_> = many.iter().map(|r| r.offset).collect();
     let asked: Vec<_> = truths.iter().map(|t| t.object).collect();
     assert_eq!(offsets, asked, "the results in trial order");
-    assert_eq!(untimed(one), untimed(many));
+    let untimed = |r: &[TrialResult]| r.iter().map(TrialResult::untimed).collect::<Vec<_>>();
+    assert_eq!(untimed(&one), untimed(&many));
 }
 
 #[test]

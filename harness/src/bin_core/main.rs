@@ -151,12 +151,12 @@ fn campaign(options: CampaignOptions) -> anyhow::Result<()> {
     let plan = campaign.plan();
     match plan.options().shard {
         Some([i, n]) => {
-            let trials = plan.truths().len();
-            let trace = plan.trace_file()?;
-            let file = Shard::of(plan.options(), trials, &outcome, trace.as_deref())?.write()?;
+            let shard = Shard::of(plan, &outcome)?;
+            let file = shard.write()?;
             println!(
-                "shard {i} of {n}: {} of {trials} trials in {} (join the shards with `harness merge`)",
+                "shard {i} of {n}: {} of {} trials in {} (join the shards with `harness merge`)",
                 outcome.results.len(),
+                shard.trials,
                 file.display()
             );
             Ok(())
@@ -186,16 +186,7 @@ fn bench(options: CampaignOptions) -> anyhow::Result<()> {
     };
     let (a, sa) = run("serial", Some(1))?;
     let (b, sb) = run("parallel", options.jobs)?;
-    let untimed = |o: &Outcome| -> Vec<_> {
-        o.results
-            .iter()
-            .map(|r| harness::trial::TrialResult {
-                wall: 0.0,
-                sim_wall: 0.0,
-                ..r.clone()
-            })
-            .collect()
-    };
+    let untimed = |o: &Outcome| -> Vec<_> { o.results.iter().map(|r| r.untimed()).collect() };
     let same = untimed(&a) == untimed(&b);
     println!(
         "campaign benchmark: {}, {} trials (reports in {})",
