@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 
-use crate::depth::{ContactSummary, DepthBackend, PixelWindow, RenderJob, Shift, Surface, View};
+use crate::depth::{
+    ContactSummary, DepthBackend, DepthImage, PixelWindow, RenderJob, Shift, Surface, View,
+};
 use crate::error::{MapError, Result};
 use crate::exact::Pair;
 use crate::map::{FtMap, MapMeta, NCH, SourceMesh};
@@ -349,21 +351,22 @@ impl Context<'_> {
         // stay parallel: a tilted part touches along an edge, in a band the contact
         // tolerance draws across the tilt, not in a crescent that the pixel under-samples.
         let level = [r1 * a0, r2 * a0].iter().all(|a| (a - a0).norm() < 1e-9);
-        let fine = Fine {
-            ctx: self,
-            view,
-            poses: [a_pose, b_pose],
-            b_normals: &b_normals,
+        let thin = |c: &ContactSummary| {
+            level && c.count > 0 && (c.count < THIN || c.mean_width() < THIN_WIDTH)
         };
+        let windows: Vec<Option<[PixelWindow; 2]>> = shifts
+            .iter()
+            .zip(&summaries)
+            .map(|(shift, c)| thin(c).then(|| Fine::windows(c, *shift, &setup)))
+            .collect();
+        let fine = Fine::render(self, view, [a_pose, b_pose], &windows, pixel)?;
         let contacts: Vec<(ContactSummary, WrenchSetup)> = shifts
             .par_iter()
             .zip(summaries)
-            .map(|(shift, c)| {
-                if !level || c.count == 0 || (c.count >= THIN && c.mean_width() >= THIN_WIDTH) {
-                    Ok((c, setup))
-                } else {
-                    fine.contact(&c, *shift, &setup)
-                }
+            .zip(&windows)
+            .map(|((shift, c), w)| match (w, &fine) {
+                (Some(w), Some(fine)) => fine.contact(c, *shift, w, &setup, &b_normals),
+                _ => Ok((c, setup)),
             })
             .collect::<Result<_>>()?;
         let s0 = Point3::from(self.task.contact.sensor_origin);
@@ -408,26 +411,20 @@ const REFINE: i64 = 4;
 /// Coarse pixels around a thin region's contact pixels that its finer images cover.
 const REFINE_MARGIN: i64 = 2;
 
-/// What a thin contact region's finer computation needs.
+/// The finer images of a rotation cell's thin contact regions: A and B rendered once
+/// [`REFINE`] times finer over the union of every thin region's windows, each region then
+/// reduced over its own part of them (the pixels a render of its windows alone gives).
 struct Fine<'a> {
     ctx: &'a Context<'a>,
-    view: View,
-    /// Poses of A and B.
-    poses: [Isometry3<f64>; 2],
-    /// B's triangle normals in view coordinates.
-    b_normals: &'a [[f32; 3]],
+    a: DepthImage,
+    b: DepthImage,
 }
 
-impl Fine<'_> {
-    /// The contact `c` of B at `shift` again at [`REFINE`] times finer pixels, over the
-    /// box of its contact pixels grown by [`REFINE_MARGIN`] coarse pixels; with the setup
-    /// of that finer image.
-    fn contact(
-        &self,
-        c: &ContactSummary,
-        shift: Shift,
-        coarse: &WrenchSetup,
-    ) -> Result<(ContactSummary, WrenchSetup)> {
+impl<'a> Fine<'a> {
+    /// The finer windows of A and B for the contact `c` of B at `shift`: the box of its
+    /// contact pixels grown by [`REFINE_MARGIN`] coarse pixels, and B's beyond it by the
+    /// shift.
+    fn windows(c: &ContactSummary, shift: Shift, coarse: &WrenchSetup) -> [PixelWindow; 2] {
         let (rows, cols) = c.rows.iter().fold(
             ([u32::MAX, 0], [u32::MAX, 0]),
             |(r, k), &(row, first, last)| {
@@ -437,52 +434,99 @@ impl Fine<'_> {
                 )
             },
         );
-        let pixel = coarse.pixel / REFINE as f64;
         let (i0, j0) = coarse.origin;
         let lo = |origin: i64, first: u32| (origin + i64::from(first) - REFINE_MARGIN) * REFINE;
         let span = |range: [u32; 2]| {
             ((i64::from(range[1] - range[0]) + 2 * REFINE_MARGIN + 1) * REFINE) as usize
         };
-        let a_win = PixelWindow {
+        let a = PixelWindow {
             i0: lo(i0, cols[0]),
             j0: lo(j0, rows[0]),
             width: span(cols).next_multiple_of(8),
             height: span(rows),
         };
-        let shift = Shift {
-            du: shift.du * REFINE,
-            dv: shift.dv * REFINE,
+        let (du, dv) = (shift.du * REFINE, shift.dv * REFINE);
+        let b = PixelWindow {
+            i0: a.i0 - du.abs(),
+            j0: a.j0 - dv.abs(),
+            width: a.width + 2 * du.unsigned_abs() as usize,
+            height: a.height + 2 * dv.unsigned_abs() as usize,
         };
-        let b_win = PixelWindow {
-            i0: a_win.i0 - shift.du.abs(),
-            j0: a_win.j0 - shift.dv.abs(),
-            width: a_win.width + 2 * shift.du.unsigned_abs() as usize,
-            height: a_win.height + 2 * shift.dv.unsigned_abs() as usize,
+        [a, b]
+    }
+
+    /// A and B (at `poses`) rendered at the finer pixel over the union of `windows`; `None`
+    /// where no region is thin.
+    fn render(
+        ctx: &'a Context<'a>,
+        view: View,
+        poses: [Isometry3<f64>; 2],
+        windows: &[Option<[PixelWindow; 2]>],
+        coarse_pixel: f64,
+    ) -> Result<Option<Self>> {
+        let Some(union) = windows
+            .iter()
+            .flatten()
+            .copied()
+            .reduce(|u, w| [u[0].union(&w[0]), u[1].union(&w[1])])
+        else {
+            return Ok(None);
         };
         let job = |mesh, pose, surface, window| RenderJob {
             mesh,
             pose,
-            view: self.view,
+            view,
             surface,
             window,
-            pixel,
+            pixel: coarse_pixel / REFINE as f64,
         };
-        let backend = self.ctx.backend;
-        let a = backend.render(&job(self.ctx.mesh_a, self.poses[0], Surface::Bottom, a_win))?;
-        let b = backend.render(&job(self.ctx.mesh_b, self.poses[1], Surface::Top, b_win))?;
-        let tolerance = self.ctx.task.depth.tolerance as f32;
+        Ok(Some(Self {
+            ctx,
+            a: ctx
+                .backend
+                .render(&job(ctx.mesh_a, poses[0], Surface::Bottom, union[0]))?,
+            b: ctx
+                .backend
+                .render(&job(ctx.mesh_b, poses[1], Surface::Top, union[1]))?,
+        }))
+    }
+
+    /// The contact `c` of B at `shift` again at the finer pixel over its `windows`, with the
+    /// setup of that finer image (the coarse one's where the finer images find no contact).
+    fn contact(
+        &self,
+        c: ContactSummary,
+        shift: Shift,
+        windows: &[PixelWindow; 2],
+        coarse: &WrenchSetup,
+        b_normals: &[[f32; 3]],
+    ) -> Result<(ContactSummary, WrenchSetup)> {
+        let [a_win, b_win] = *windows;
+        let shift = Shift {
+            du: shift.du * REFINE,
+            dv: shift.dv * REFINE,
+        };
         let setup = WrenchSetup {
             origin: (a_win.i0, a_win.j0),
-            pixel,
+            pixel: coarse.pixel / REFINE as f64,
             ..*coarse
         };
+        let tolerance = self.ctx.task.depth.tolerance as f32;
         Ok(
-            match backend
-                .contacts(&a, &b, self.b_normals, &[shift], tolerance)?
+            match self
+                .ctx
+                .backend
+                .contacts(
+                    &self.a.crop(a_win),
+                    &self.b.crop(b_win),
+                    b_normals,
+                    &[shift],
+                    tolerance,
+                )?
                 .pop()
             {
                 Some(fine) if fine.count > 0 => (fine, setup),
-                _ => (c.clone(), *coarse),
+                _ => (c, *coarse),
             },
         )
     }

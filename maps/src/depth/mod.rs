@@ -104,6 +104,20 @@ impl PixelWindow {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+
+    /// The smallest window holding both.
+    pub fn union(&self, other: &Self) -> Self {
+        let i0 = self.i0.min(other.i0);
+        let j0 = self.j0.min(other.j0);
+        let i1 = (self.i0 + self.width as i64).max(other.i0 + other.width as i64);
+        let j1 = (self.j0 + self.height as i64).max(other.j0 + other.height as i64);
+        Self {
+            i0,
+            j0,
+            width: (i1 - i0) as usize,
+            height: (j1 - j0) as usize,
+        }
+    }
 }
 
 /// What to render: a mesh at a pose, seen in a view, over a window.
@@ -149,6 +163,34 @@ impl DepthImage {
             height: vec![fill; window.len()],
             tri: vec![u32::MAX; window.len()],
         }
+    }
+
+    /// The part of the image within `window`, which it must hold: the same pixels a render
+    /// over `window` gives (a pixel's value depends on its lattice position alone).
+    pub fn crop(&self, window: PixelWindow) -> Self {
+        let (di, dj) = (window.i0 - self.window.i0, window.j0 - self.window.j0);
+        assert!(
+            di >= 0
+                && dj >= 0
+                && di as usize + window.width <= self.window.width
+                && dj as usize + window.height <= self.window.height,
+            "crop {window:?} outside {:?}",
+            self.window
+        );
+        let mut out = Self {
+            window,
+            pixel: self.pixel,
+            height: Vec::with_capacity(window.len()),
+            tri: Vec::with_capacity(window.len()),
+        };
+        for row in 0..window.height {
+            let start = (dj as usize + row) * self.window.width + di as usize;
+            out.height
+                .extend_from_slice(&self.height[start..start + window.width]);
+            out.tri
+                .extend_from_slice(&self.tri[start..start + window.width]);
+        }
+        out
     }
 
     /// Number of pixels with a surface.
