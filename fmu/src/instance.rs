@@ -15,8 +15,8 @@ use crate::trace::Trace;
 /// First bytes of a saved FMU state.
 pub const STATE_MAGIC: [u8; 8] = *b"FTFSTATE";
 /// Version of the saved-state layout (2: the `vision.valid` edge; 3: the filter's evidence
-/// that its particles are lost).
-pub const STATE_VERSION: u32 = 3;
+/// that its particles are lost; 4: the `centre_map` parameter).
+pub const STATE_VERSION: u32 = 4;
 
 /// FMI 2.0 status of a call.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -372,7 +372,13 @@ impl Instance {
         let path = self
             .resource_path(&params.map)
             .map_err(|(path, reason)| FusionError::Map { path, reason })?;
-        let lookup = crate::shared::map(&path)?;
+        let centre = params
+            .centre_map
+            .as_deref()
+            .map(|name| self.resource_path(name))
+            .transpose()
+            .map_err(|(path, reason)| FusionError::Map { path, reason })?;
+        let lookup = crate::shared::map(&path, centre.as_deref())?;
         let task = lookup.task().to_owned();
         let mut filter = Filter::with_lookup(lookup, params.config);
         if let Some(name) = &params.vision {
@@ -421,8 +427,12 @@ impl Instance {
             Status::Ok,
             "logFilter",
             &format!(
-                "map {} ({} cells over {}), {} particles",
+                "map {}{} ({} cells over {}), {} particles",
                 path.display(),
+                centre
+                    .as_ref()
+                    .map(|c| format!(" with centre map {}", c.display()))
+                    .unwrap_or_default(),
                 filter.lookup().cells(),
                 dofs.join(", "),
                 params.config.particles

@@ -139,6 +139,8 @@ impl Store {
 pub struct Params {
     /// The `map` parameter as given.
     pub map: String,
+    /// The `centre_map` parameter (`None`: empty, no centre map).
+    pub centre_map: Option<String>,
     /// The `vision` parameter (`None`: empty, no vision).
     pub vision: Option<String>,
     /// `sigma_vision` (px).
@@ -219,8 +221,10 @@ impl Params {
                 range: "a file name in the resources folder or an absolute path".into(),
             });
         }
-        let vision =
-            Some(store.string(index_of("vision")).trim().to_owned()).filter(|v| !v.is_empty());
+        let named =
+            |name| Some(store.string(index_of(name)).trim().to_owned()).filter(|v| !v.is_empty());
+        let centre_map = named("centre_map");
+        let vision = named("vision");
         let sigma_vision = checked(store, "sigma_vision")?;
         let vision_method = if checked(store, "vision_method")? == 0.0 {
             VisionMethod::Relative
@@ -232,6 +236,7 @@ impl Params {
             .map(std::path::PathBuf::from);
         Ok(Self {
             map,
+            centre_map,
             config,
             vision,
             sigma_vision,

@@ -13,37 +13,51 @@ use crate::filter::Lookup;
 /// What identifies a file's contents without reading it: device, inode, size, mtime.
 type Stamp = (u64, u64, u64, Option<SystemTime>);
 
-/// The prepared maps by canonical path, with the stamp of the file each was read from.
-type Table = HashMap<PathBuf, (Stamp, Weak<Lookup>)>;
+/// The prepared maps by canonical path of the map and of its centre map, with the stamps
+/// of the files each was read from.
+type Table = HashMap<(PathBuf, Option<PathBuf>), (Vec<Stamp>, Weak<Lookup>)>;
 
 /// The maps some instance holds (or held: entries whose map was freed are dropped).
 static MAPS: Mutex<Option<Table>> = Mutex::new(None);
 
-/// The prepared map of the file `path`: the copy another instance holds when the file is
-/// unchanged since it was read, else read now (and kept for the next instance).
+/// The prepared map of the file `path`, with the centre map of the file `centre` where
+/// given: the copy another instance holds when the files are unchanged since they were
+/// read, else read now (and kept for the next instance).
 ///
 /// # Errors
-/// As the map loader, and [`Lookup::new`].
-pub fn map(path: &Path) -> Result<Arc<Lookup>> {
-    use std::os::unix::fs::MetadataExt;
-    let file_err = |e: std::io::Error| FusionError::MapFile(ftmap::MapError::io(path)(e));
-    let canonical = path.canonicalize().map_err(file_err)?;
-    let m = std::fs::metadata(&canonical).map_err(file_err)?;
-    let stamp = (m.dev(), m.ino(), m.len(), m.modified().ok());
+/// As the map loader, [`Lookup::new`] and [`Lookup::with_centre`].
+pub fn map(path: &Path, centre: Option<&Path>) -> Result<Arc<Lookup>> {
+    let (canonical, stamp) = identify(path)?;
+    let (centre_canonical, centre_stamp) = centre.map(identify).transpose()?.unzip();
+    let stamps: Vec<Stamp> = std::iter::once(stamp).chain(centre_stamp).collect();
+    let key = (canonical, centre_canonical);
     // A panic elsewhere while holding the lock leaves the map table whole: go on with it.
     let mut maps = MAPS.lock().unwrap_or_else(|e| e.into_inner());
     let maps = maps.get_or_insert_with(HashMap::new);
     maps.retain(|_, (_, weak)| weak.strong_count() > 0);
-    if let Some((s, weak)) = maps.get(&canonical)
-        && *s == stamp
+    if let Some((s, weak)) = maps.get(&key)
+        && *s == stamps
         && let Some(lookup) = weak.upgrade()
     {
         return Ok(lookup);
     }
-    let map = ftmap::map::format::load(path).map_err(FusionError::MapFile)?;
-    let lookup = Arc::new(Lookup::new(&map, path)?);
-    maps.insert(canonical, (stamp, Arc::downgrade(&lookup)));
+    let load = |p: &Path| ftmap::map::format::load(p).map_err(FusionError::MapFile);
+    let map = load(path)?;
+    let lookup = Arc::new(match centre {
+        Some(c) => Lookup::with_centre(&map, path, &load(c)?, c)?,
+        None => Lookup::new(&map, path)?,
+    });
+    maps.insert(key, (stamps, Arc::downgrade(&lookup)));
     Ok(lookup)
+}
+
+/// The canonical path of the file `path` and what identifies its contents.
+fn identify(path: &Path) -> Result<(PathBuf, Stamp)> {
+    use std::os::unix::fs::MetadataExt;
+    let file_err = |e: std::io::Error| FusionError::MapFile(ftmap::MapError::io(path)(e));
+    let canonical = path.canonicalize().map_err(file_err)?;
+    let m = std::fs::metadata(&canonical).map_err(file_err)?;
+    Ok((canonical, (m.dev(), m.ino(), m.len(), m.modified().ok())))
 }
 
 /// Drops the table once no instance holds a map: an FMU unloaded after its last instance
@@ -69,16 +83,16 @@ mod tests {
         let path = dir.join("m.ftmap");
         let map = ftfusion_testkit::peg_map(2e-3, 5e-4, None).expect("map");
         ftmap::map::format::save(&map, &path).expect("write");
-        let a = super::map(&path).expect("loads");
-        let b = super::map(&dir.join(".").join("m.ftmap")).expect("loads");
+        let a = super::map(&path, None).expect("loads");
+        let b = super::map(&dir.join(".").join("m.ftmap"), None).expect("loads");
         assert!(Arc::ptr_eq(&a, &b), "the same file, one copy");
         // Rewritten (a new inode): read again.
         ftmap::map::format::save(&map, &path).expect("write");
-        let c = super::map(&path).expect("loads");
+        let c = super::map(&path, None).expect("loads");
         assert!(!Arc::ptr_eq(&a, &c));
         drop((a, b, c));
         let gone = MAPS.lock().expect("lock").as_ref().and_then(|m| {
-            m.get(&path.canonicalize().expect("path"))
+            m.get(&(path.canonicalize().expect("path"), None))
                 .map(|(_, w)| w.strong_count())
         });
         assert_eq!(gone, Some(0), "nobody holds it: it is freed");

@@ -85,6 +85,9 @@ pub struct CampaignOptions {
     /// FT-Map for the FMU (default: the FMU's embedded map for peg_in_hole, else the task's
     /// map computed from its CAD meshes and cached in target/maps/).
     pub map: Option<PathBuf>,
+    /// The centre map for the FMU ([`ftmap::map::centre`]).
+    #[serde(default)]
+    pub centre_map: CentreMap,
     /// Fuse the camera with the F/T sensor (experiment D).
     pub vision: bool,
     /// How the FMU evaluates particles by vision.
@@ -134,6 +137,21 @@ pub struct CampaignOptions {
     pub shard: Option<[usize; 2]>,
 }
 
+/// Which centre map the FMU reads besides the map.
+#[derive(Debug, Clone, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CentreMap {
+    /// Computed from the CAD meshes and cached with a map computed from them, where its
+    /// grid is too coarse for the fit ([`ftmap::map::centre::centre_task`]); none with a
+    /// given map.
+    #[default]
+    Auto,
+    /// None.
+    None,
+    /// This file.
+    File(PathBuf),
+}
+
 /// What setting a campaign up did that its user should hear of, in order.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SetupNote {
@@ -141,6 +159,14 @@ pub enum SetupNote {
     /// in `computed` seconds.
     Map {
         /// The map file.
+        path: PathBuf,
+        /// Seconds the computation took, when the map was not cached.
+        computed: Option<f64>,
+    },
+    /// The map's centre map from the cache (`computed: None`) or computed from the CAD
+    /// meshes in `computed` seconds.
+    Centre {
+        /// The centre map file.
         path: PathBuf,
         /// Seconds the computation took, when the map was not cached.
         computed: Option<f64>,
@@ -166,6 +192,14 @@ impl fmt::Display for SetupNote {
                 path,
                 computed: None,
             } => write!(f, "map {} (cached)", path.display()),
+            Self::Centre { path, computed } => write!(
+                f,
+                "centre map {} ({})",
+                path.display(),
+                computed.map_or("cached".into(), |s| format!(
+                    "computed from the CAD meshes in {s:.1} s"
+                ))
+            ),
             Self::VisionModel(path) => write!(
                 f,
                 "vision model {} (camera as MuJoCo places it)",
@@ -489,7 +523,7 @@ impl Campaign {
         let plan = Plan::new(options)?;
         let (task, options) = (&plan.task, &plan.options);
         check_dofs(task, options.vision)?;
-        let map = resolve_map(options.map.as_deref(), task, note)?;
+        let (map, centre) = resolve_map(options, task, note)?;
         let fit = task.fit()?;
         let source = match &options.world {
             WorldKind::Mujoco => WorldSource::Mujoco,
@@ -503,7 +537,7 @@ impl Campaign {
             }
         };
         let world = source.open(task)?;
-        let mut config = trial_config(&plan, fit.as_ref(), map)?;
+        let mut config = trial_config(&plan, fit.as_ref(), map, centre)?;
         let eye = open_eye(options, task, &mut config, note)?;
         let fmu = match options.strategy {
             Strategy::Pf => {
@@ -582,51 +616,93 @@ impl Campaign {
 }
 
 /// The FT-Map file for the FMU: the given one, none for peg_in_hole (the FMU's embedded
-/// map), else the task's map computed from its CAD meshes and cached in target/maps/.
+/// map), else the task's map computed from its CAD meshes and cached in target/maps/; and
+/// its centre map, where one is given or computed ([`CentreMap`]).
 fn resolve_map(
-    map: Option<&Path>,
+    options: &CampaignOptions,
     task: &Task,
     note: &mut dyn FnMut(SetupNote),
-) -> Result<Option<PathBuf>> {
-    let map = match map {
-        Some(m) => Some(std::path::absolute(m).map_err(|e| HarnessError::io(m, e))?),
+) -> Result<(Option<PathBuf>, Option<PathBuf>)> {
+    let absolute = |m: &Path| std::path::absolute(m).map_err(|e| HarnessError::io(m, e));
+    let map = match &options.map {
+        Some(m) => Some(absolute(m)?),
         None if task.name == "peg_in_hole" => None,
         None => Some(cached_map(task, note)?),
     };
-    match map {
-        Some(m) if !m.is_file() => Err(HarnessError::MapMissing {
-            path: m,
+    let centre = match &options.centre_map {
+        CentreMap::File(c) => Some(absolute(c)?),
+        _ => None,
+    };
+    if let Some(m) = map.iter().chain(&centre).find(|m| !m.is_file()) {
+        return Err(HarnessError::MapMissing {
+            path: m.clone(),
             task: task.name.clone(),
-        }),
-        map => {
-            // What the FMU will read: the map's own grid and pixel (a file the FMU cannot
-            // read is its to report), or the task's for the embedded map.
-            let coarse = match &map {
-                Some(m) => format::load_any(m)
-                    .map(|(m, _)| too_coarse(m.grid(), m.meta().pixel, m.meta().clearance))
-                    .unwrap_or_default(),
-                None => too_coarse(
-                    &task.grid().map_err(|source| HarnessError::TaskMap {
-                        task: task.name.clone(),
-                        source,
-                    })?,
-                    task.depth.pixel,
-                    task.geometry.as_ref().map(|g| g.clearance()),
-                ),
-            };
-            coarse.into_iter().for_each(|c| note(SetupNote::Coarse(c)));
-            Ok(map)
-        }
+        });
     }
+    // What the FMU will read: the map's own grid and pixel (a file the FMU cannot read is
+    // its to report), or the task's for the embedded map.
+    let loaded = map
+        .as_deref()
+        .and_then(|m| format::load_any(m).ok())
+        .map(|(m, _)| m);
+    let centre = match (&options.centre_map, &loaded) {
+        (CentreMap::Auto, Some(m)) if options.map.is_none() => cached_centre(task, m, note)?,
+        _ => centre,
+    };
+    let coarse = match &loaded {
+        Some(m) => too_coarse(m.grid(), m.meta().pixel, m.meta().clearance),
+        None if map.is_some() => Vec::new(),
+        None => too_coarse(
+            &task.grid().map_err(|source| HarnessError::TaskMap {
+                task: task.name.clone(),
+                source,
+            })?,
+            task.depth.pixel,
+            task.geometry.as_ref().map(|g| g.clearance()),
+        ),
+    };
+    // A centre map resolves the fit where the grid's step does not.
+    coarse
+        .into_iter()
+        .filter(|c| centre.is_none() || !matches!(c, Coarse::Step { .. }))
+        .for_each(|c| note(SetupNote::Coarse(c)));
+    Ok((map, centre))
+}
+
+/// The centre map of `task`, whose map computed from CAD is `map`, from the cache in
+/// target/maps/ when it is there; `None` where the map's grid resolves the fit.
+fn cached_centre(
+    task: &Task,
+    map: &ftmap::FtMap,
+    note: &mut dyn FnMut(SetupNote),
+) -> Result<Option<PathBuf>> {
+    let t0 = Instant::now();
+    let found = ftmap::generate::cached_centre(task, map, &maps_dir()).map_err(|source| {
+        HarnessError::TaskMap {
+            task: task.name.clone(),
+            source,
+        }
+    })?;
+    Ok(found.map(|(path, computed)| {
+        note(SetupNote::Centre {
+            path: path.clone(),
+            computed: computed.then(|| t0.elapsed().as_secs_f64()),
+        });
+        path
+    }))
+}
+
+/// Where computed maps are cached: target/maps/.
+fn maps_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps")
 }
 
 /// The task's FT-Map computed from its CAD meshes, from the cache in target/maps/ when it
 /// is there.
 fn cached_map(task: &Task, note: &mut dyn FnMut(SetupNote)) -> Result<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
     let t0 = Instant::now();
     let (path, computed) =
-        ftmap::generate::cached(task, &dir).map_err(|source| HarnessError::TaskMap {
+        ftmap::generate::cached(task, &maps_dir()).map_err(|source| HarnessError::TaskMap {
             task: task.name.clone(),
             source,
         })?;
@@ -660,7 +736,12 @@ fn twist_setup(task: &Task, fit: &dyn Fit, map: Option<&Path>) -> Result<Option<
 }
 
 /// The trial limits and FMU settings of a campaign, with the FT-Map file `map`.
-fn trial_config(plan: &Plan, fit: &dyn Fit, map: Option<PathBuf>) -> Result<TrialConfig> {
+fn trial_config(
+    plan: &Plan,
+    fit: &dyn Fit,
+    map: Option<PathBuf>,
+    centre_map: Option<PathBuf>,
+) -> Result<TrialConfig> {
     let (task, options) = (&plan.task, &plan.options);
     let size = task.omega.size_trans;
     // The spiral's pitch stays below twice the radial clearance.
@@ -691,6 +772,7 @@ fn trial_config(plan: &Plan, fit: &dyn Fit, map: Option<PathBuf>) -> Result<Tria
         spiral_radius,
         settings: Settings {
             map,
+            centre_map,
             particles: options.particles.or(particles_for(task.dofs()?.len())),
             iterations: options.iterations,
             sigma_torque: options.sigma_torque,

@@ -28,6 +28,8 @@ pub fn default_fmu_path() -> PathBuf {
 pub struct Settings {
     /// `map`: an absolute path of an FT-Map file.
     pub map: Option<PathBuf>,
+    /// `centre_map`: an absolute path of the map's centre map.
+    pub centre_map: Option<PathBuf>,
     /// `seed`.
     pub seed: Option<i32>,
     /// `particles`.
@@ -105,6 +107,7 @@ struct Refs {
     ints: [u32; 2],
     converged: u32,
     map: u32,
+    centre_map: u32,
     seed: u32,
     particles: u32,
     iterations: u32,
@@ -202,6 +205,7 @@ impl Fmu {
             ints: [vr("measurements")?, vr("clusters")?],
             converged: vr("converged")?,
             map: vr("map")?,
+            centre_map: vr("centre_map")?,
             seed: vr("seed")?,
             particles: vr("particles")?,
             iterations: vr("iterations")?,
@@ -246,6 +250,7 @@ impl Fmu {
         let r = &self.refs;
         for (vr, file, name) in [
             (r.map, &settings.map, "map"),
+            (r.centre_map, &settings.centre_map, "centre_map"),
             (r.vision, &settings.vision, "vision"),
             (r.trace, &settings.trace, "trace"),
         ] {

@@ -159,9 +159,8 @@ impl Spread {
 /// beyond half the fit's play: a twist at the estimate through the whole period where the
 /// fit is symmetric about z (else across [`SLIDE_SIGMAS`] of the yaw's spread each way). A
 /// press where x, y are right but the yaw is not stays out, and near the centre the corners
-/// rest on the rim alike at every yaw: there the yaw is weakly observable, and its spread
-/// is too narrow (octagon_yaw, 100 trials: the true yaw within 2 sigma in 62 % of the
-/// measurements). A twist passes every yaw of its range and drops in at the right one.
+/// rest on the rim alike at every yaw: there the yaw is weakly observable. A twist passes
+/// every yaw of its range and drops in at the right one.
 pub fn next_motion(
     tcp: [f64; 2],
     estimate: &Estimate,

@@ -100,10 +100,13 @@ fn no_rotation(what: &str, rot: [f64; 3]) -> Result<()> {
 
 /// Points a slide in the map world checks per radial clearance of the fit.
 const SLIDE_SAMPLES_PER_CLEARANCE: f64 = 8.0;
+/// Yaw between the points a twist in the map world checks (rad): a fiftieth of a degree,
+/// well within the octagon's ±0.7 degrees of play.
+const TWIST_STEP: f64 = 3.5e-4;
 
-/// The FT-Map as the world: a contact reads the map's wrench at the object's offset from the
-/// TCP (interpolated over the cells where part A rests on part B), at the map's contact
-/// depth; part A goes in where the task's geometry says it does.
+/// The FT-Map as the world: a contact reads the map's wrench at the object's pose relative
+/// to the TCP (interpolated over the cells where part A rests on part B), at the map's
+/// contact depth; part A goes in where the task's geometry says it does.
 pub struct MapWorld {
     map: FtMap,
     /// The map's [`FtMap::contact_depth`].
@@ -111,17 +114,24 @@ pub struct MapWorld {
     fit: Arc<dyn Fit>,
     /// Whether the map's first two axes are `grip.x`, `grip.y`.
     has_grip: bool,
+    /// The yaw's period, when the map's third axis is `object.rz` (2 pi where the fit has
+    /// no symmetry about the approach).
+    yaw_period: Option<f64>,
     object: [f64; 2],
     grip: [f64; 2],
+    /// Part B's yaw and the TCP's (rad).
+    yaw: [f64; 2],
 }
 
 impl MapWorld {
     /// The world of `map` (over `object.x`, `object.y`, after `grip.x`, `grip.y` where the
-    /// grip is uncertain) for parts that fit as `fit` says.
+    /// grip is uncertain, or followed by `object.rz` where the fit answers at every yaw) for
+    /// parts that fit as `fit` says.
     ///
     /// # Errors
-    /// [`HarnessError::MapWorld`] when the map's axes are not exactly `object.x`, `object.y`
-    /// or `grip.x`, `grip.y`, `object.x`, `object.y`.
+    /// [`HarnessError::MapWorld`] when the map's axes are not exactly `object.x`, `object.y`,
+    /// `grip.x`, `grip.y`, `object.x`, `object.y` or `object.x`, `object.y`, `object.rz`, or
+    /// the last without a fit known at every yaw (a task without `[geometry]`).
     pub fn new(map: FtMap, fit: Arc<dyn Fit>) -> Result<Self> {
         let is = |k: usize, pose, axis| {
             map.grid()
@@ -135,9 +145,16 @@ impl MapWorld {
             && is(1, Pose::Grip, Axis::Y)
             && object_at(2);
         let planar = map.grid().ndim() == 2 && object_at(0);
-        if !(has_grip || planar) {
+        let turned = map.grid().ndim() == 3 && object_at(0) && is(2, Pose::Object, Axis::Rz);
+        if turned && fit.inserts_turned([0.0; 2], TWIST_STEP).is_none() {
+            return Err(HarnessError::MapWorld(
+                "its object.rz needs the fit at every yaw, which only a task's [geometry] gives"
+                    .into(),
+            ));
+        }
+        if !(has_grip || planar || turned) {
             return Err(HarnessError::MapWorld(format!(
-                "its axes are {}, the map world needs object.x, object.y, after grip.x, grip.y or alone",
+                "its axes are {}, the map world needs object.x, object.y, after grip.x, grip.y, before object.rz or alone",
                 map.grid()
                     .axes()
                     .iter()
@@ -146,31 +163,50 @@ impl MapWorld {
                     .join(", ")
             )));
         }
+        let yaw_period = turned.then(|| {
+            map.meta().symmetry.map_or(std::f64::consts::TAU, |n| {
+                std::f64::consts::TAU / f64::from(n)
+            })
+        });
         Ok(Self {
             contact_depth: map.contact_depth(),
             map,
             fit,
             has_grip,
+            yaw_period,
             object: [0.0; 2],
             grip: [0.0; 2],
+            yaw: [0.0; 2],
         })
     }
 
-    /// Part B's offset from a TCP at `xy` (m).
-    fn offset(&self, xy: [f64; 2]) -> [f64; 2] {
-        [self.object[0] - xy[0], self.object[1] - xy[1]]
+    /// Part B's pose relative to a TCP at `xy` (T_tcp^-1 T_object): its offset in the TCP's
+    /// frame (m) and its yaw relative to the TCP's (rad, within half a period of zero).
+    fn relative(&self, xy: [f64; 2]) -> ([f64; 2], f64) {
+        let d = [self.object[0] - xy[0], self.object[1] - xy[1]];
+        let (s, c) = self.yaw[1].sin_cos();
+        let yaw = self.yaw[0] - self.yaw[1];
+        let yaw = self.yaw_period.map_or(yaw, |p| yaw - p * (yaw / p).round());
+        ([c * d[0] + s * d[1], c * d[1] - s * d[0]], yaw)
+    }
+
+    /// Whether part A goes in at `xy`.
+    fn goes_in(&self, xy: [f64; 2]) -> bool {
+        let (offset, yaw) = self.relative(xy);
+        // A fit known at zero yaw only serves maps without a yaw, where the yaw is zero.
+        self.fit.inserts_turned(offset, yaw).unwrap_or(false)
     }
 
     /// The contact at `xy`: inserted (the task frame on the goal), or resting on part B
     /// with the map's wrench and depth.
     fn contact_at(&self, xy: [f64; 2]) -> Contact {
-        let offset = self.offset(xy);
-        let inserted = self.fit.inserts(offset);
+        let (offset, yaw) = self.relative(xy);
+        let inserted = self.goes_in(xy);
         // The map's axes were checked: the coordinates fit its grid.
-        let coords = if self.has_grip {
-            vec![self.grip[0], self.grip[1], offset[0], offset[1]]
-        } else {
-            offset.to_vec()
+        let coords = match (self.has_grip, self.yaw_period) {
+            (true, _) => vec![self.grip[0], self.grip[1], offset[0], offset[1]],
+            (false, Some(_)) => vec![offset[0], offset[1], yaw],
+            (false, None) => offset.to_vec(),
         };
         let cell = self
             .map
@@ -183,10 +219,23 @@ impl MapWorld {
         Contact {
             raw,
             tcp: [xy[0], xy[1], if inserted { 0.0 } else { cell[NCH - 1] }],
-            rot: [0.0; 3],
+            rot: [0.0, 0.0, self.yaw[1]],
             settled: true,
             inserted,
             time: 0.0,
+        }
+    }
+}
+
+impl MapWorld {
+    /// The yaw of rotation vector `rot`, refused on a map without one or where `rot` tilts.
+    fn yaw_of(&self, what: &str, rot: [f64; 3]) -> Result<f64> {
+        match self.yaw_period {
+            Some(_) if rot[0] == 0.0 && rot[1] == 0.0 => Ok(rot[2]),
+            Some(_) => Err(HarnessError::MapWorld(format!(
+                "its map turns about z only: {what} cannot tilt by {rot:?} rad"
+            ))),
+            None => no_rotation(what, rot).map(|()| 0.0),
         }
     }
 }
@@ -201,14 +250,16 @@ impl World for MapWorld {
         self.grip = xy;
     }
 
-    /// The map world's maps have no rotation axes: only no rotation is accepted.
+    /// A yaw on a map with `object.rz`; no rotation otherwise.
     fn set_object_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
-        no_rotation("part B", rot)
+        self.yaw[0] = self.yaw_of("part B", rot)?;
+        Ok(())
     }
 
     /// As [`MapWorld::set_object_rotation`].
     fn set_tcp_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
-        no_rotation("the TCP", rot)
+        self.yaw[1] = self.yaw_of("the TCP", rot)?;
+        Ok(())
     }
 
     fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {
@@ -226,14 +277,22 @@ impl World for MapWorld {
                     from[1] + t * (to[1] - from[1]),
                 ]
             })
-            .find(|&p| self.fit.inserts(self.offset(p)))
+            .find(|&p| self.goes_in(p))
             .map_or_else(|| self.contact_at(to), |p| self.contact_at(p))
     }
 
-    /// Its maps have no yaw: a twist that turns is refused, one that does not is a press.
+    /// Turns through the yaws from `from` to `to`, stopping where part A goes in; on a map
+    /// without a yaw a twist that turns is refused, one that does not is a press.
     fn twist_motion(&mut self, xy: [f64; 2], from: f64, to: f64) -> Result<Contact> {
-        no_rotation("the TCP", [0.0, 0.0, from])?;
-        no_rotation("the TCP", [0.0, 0.0, to])?;
+        self.set_tcp_rotation([0.0, 0.0, from])?;
+        self.set_tcp_rotation([0.0, 0.0, to])?;
+        let samples = ((to - from).abs() / TWIST_STEP).ceil() as usize;
+        for k in 0..=samples {
+            self.yaw[1] = from + (to - from) * k as f64 / samples.max(1) as f64;
+            if self.goes_in(xy) {
+                break;
+            }
+        }
         Ok(self.contact_at(xy))
     }
 

@@ -128,6 +128,24 @@ const MAP_REVISION: u32 = 5;
 /// # Errors
 /// When the task's files cannot be read, the map cannot be computed or stored.
 pub fn cached(task: &Task, dir: &Path) -> Result<(PathBuf, bool)> {
+    cached_as(task, task, "", dir)
+}
+
+/// The centre map ([`crate::map::centre`]) of `task`, whose map is `map`, from the cache
+/// folder `dir` like [`cached`] (file `<task>-<hash>.centre.ftmap`); `None` where the map's
+/// grid resolves the fit.
+///
+/// # Errors
+/// As [`cached`].
+pub fn cached_centre(task: &Task, map: &FtMap, dir: &Path) -> Result<Option<(PathBuf, bool)>> {
+    match crate::map::centre::centre_task(task, map.grid(), map.meta().clearance)? {
+        Some(centre) => cached_as(&centre, task, ".centre", dir).map(Some),
+        None => Ok(None),
+    }
+}
+
+/// The map of `computed` cached under the files of `task` and `suffix` in `dir`.
+fn cached_as(computed: &Task, task: &Task, suffix: &str, dir: &Path) -> Result<(PathBuf, bool)> {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
     for f in [&task.path, &task.part_a.mesh, &task.part_b.mesh] {
@@ -135,19 +153,20 @@ pub fn cached(task: &Task, dir: &Path) -> Result<(PathBuf, bool)> {
     }
     h.update(env!("CARGO_PKG_VERSION"));
     h.update(MAP_REVISION.to_le_bytes());
+    h.update(suffix);
     let hash: String = h
         .finalize()
         .iter()
         .take(8)
         .map(|b| format!("{b:02x}"))
         .collect();
-    let path = dir.join(format!("{}-{hash}.ftmap", task.name));
+    let path = dir.join(format!("{}-{hash}{suffix}.ftmap", task.name));
     if path.is_file() && crate::map::format::load(&path).is_ok() {
         return Ok((path, false));
     }
     std::fs::create_dir_all(dir).map_err(MapError::io(dir))?;
     let map = generate(
-        task,
+        computed,
         &crate::depth::cpu::CpuBackend,
         &GenerateOptions::default(),
         &|_| {},

@@ -422,6 +422,16 @@ pub const VARIABLES: &[Variable] = &[
          uniform draw over Omega does make that more likely than not, half the particles are \
          redrawn uniformly over Omega; 0: never",
     ),
+    param(
+        "centre_map",
+        117,
+        VarType::String,
+        Start::String(""),
+        "",
+        [None, None],
+        "Centre map of `map` (a finer map of the cells around the goal, `ftmap generate \
+         --centre`): a name in the FMU's resources folder or an absolute path; empty: none",
+    ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
         "vision",

@@ -9,9 +9,13 @@
 //! corners: a particle 0.06 mm off the hole's centre on a 0.1 mm grid reads the rim's
 //! torque, not a blend with the inserted centre's zero torque. The depth channel is not
 //! masked.
+//!
+//! A centre map ([`ftmap::map::centre`]), where given, answers for the particles within
+//! its region: the same lookup on its finer grid.
 
 use std::path::Path;
 
+use ftmap::task::omega::MAX_AXES;
 use ftmap::{Axis, Dof, FtMap, NCH, Pose};
 
 use crate::error::{FusionError, Result};
@@ -86,8 +90,10 @@ impl MapAxis {
 pub struct Lookup {
     /// The map's task (its metadata).
     task: String,
-    axes: Vec<MapAxis>,
-    cells: Vec<[f32; LANES]>,
+    /// The map's axes and cells.
+    level: Level,
+    /// The centre map, when one is given.
+    centre: Option<Centre>,
     /// Lowest and highest value of the depth channel, when it holds values.
     depth_range: Option<[f32; 2]>,
     approach: [f64; 3],
@@ -97,6 +103,31 @@ pub struct Lookup {
     /// Per axis, the fit's rotational play at zero offset (grid units; 0 but on object
     /// rotations).
     play: Vec<f32>,
+}
+
+/// One grid of padded cells: the map's, or its centre map's.
+#[derive(Debug, Clone)]
+struct Level {
+    axes: Vec<MapAxis>,
+    cells: Vec<[f32; LANES]>,
+}
+
+/// The centre map's cells and where its grid lies on the map's.
+#[derive(Debug, Clone)]
+struct Centre {
+    level: Level,
+    /// Per axis, the centre's grid coordinate is the map's times `scale` plus `offset`.
+    scale: [f32; MAX_AXES],
+    offset: [f32; MAX_AXES],
+}
+
+/// What the lookups of `D` axes need of a level: per axis the largest coordinate, the last
+/// lower corner index, the stride, and the stride to the upper corner (0 on a single sample).
+struct Params<const D: usize> {
+    top: [f32; D],
+    lo_max: [usize; D],
+    stride: [usize; D],
+    up: [usize; D],
 }
 
 /// How a predicted cell is weighed against a measurement (Eq. 3, -1/2 chi^2): each
@@ -156,34 +187,15 @@ pub enum Interpolation {
 impl Lookup {
     /// Prepares `map`; `path` names the file in errors (NaN cells, empty grid).
     pub fn new(map: &FtMap, path: &Path) -> Result<Self> {
-        let grid = map.grid();
         let bad = |reason: String| FusionError::Map {
             path: path.to_owned(),
             reason,
         };
-        if grid.ndim() == 0 {
+        if map.grid().ndim() == 0 {
             return Err(bad("the map has no uncertain DOF".into()));
         }
-        let symmetry = map.meta().symmetry;
-        let axes: Vec<MapAxis> = grid
-            .axes()
-            .iter()
-            .enumerate()
-            .map(|(k, a)| MapAxis {
-                dof: a.dof,
-                min: a.min,
-                step: a.step,
-                count: a.count,
-                stride: grid.stride(k),
-                // Object DOFs move with the TCP (particle pose - TCP pose); z is the approach
-                // axis, whose TCP value is the measured contact height, not a displacement.
-                tcp: (a.dof.pose == Pose::Object && a.dof.axis != Axis::Z)
-                    .then_some(a.dof.axis.index()),
-                period: (a.dof == Dof::new(Pose::Object, Axis::Rz) && symmetry.is_some())
-                    .then(|| (a.count - 1) as f32),
-            })
-            .collect();
-        if let Some(n) = symmetry
+        let axes = axes_of(map);
+        if let Some(n) = map.meta().symmetry
             && let Some(a) = axes.iter().find(|a| a.period.is_some())
         {
             let period = std::f64::consts::TAU / f64::from(n);
@@ -194,48 +206,65 @@ impl Lookup {
                 )));
             }
         }
-        let mut cells = Vec::with_capacity(grid.cells());
-        let mut largest = [0.0f64; 2];
-        for i in 0..grid.cells() {
-            let c = map.cell(i);
-            if let Some(ch) = c.iter().position(|v| !v.is_finite()) {
-                return Err(bad(format!(
-                    "cell {i} has a non-finite value in channel {}",
-                    ftmap::CHANNELS[ch]
-                )));
-            }
-            for (l, v) in largest.iter_mut().zip([&c[..3], &c[3..6]]) {
-                *l = l.max(f64::from(v.iter().map(|x| x * x).sum::<f32>().sqrt()));
-            }
-            let mut padded = [0.0; LANES];
-            padded[..NCH].copy_from_slice(c);
-            padded[CONTACT] = 1.0;
-            cells.push(padded);
-        }
-        let mut lookup = Self {
-            task: map.meta().task.clone(),
-            axes,
-            cells,
-            depth_range: map.depth_range(),
-            approach: map.meta().approach,
-            clearance: map.meta().clearance,
-            largest,
-            play: Vec::new(),
-        };
-        for i in 0..lookup.cells.len() {
-            if lookup.inserted(f64::from(lookup.cells[i][NCH - 1])) {
-                let cell = &mut lookup.cells[i];
-                cell[..NCH - 1].fill(0.0);
-                cell[CONTACT] = 0.0;
-            }
-        }
-        lookup.play = lookup
-            .axes
+        let depth_range = map.depth_range();
+        let (cells, largest) = padded(map, depth_range, path)?;
+        let play = axes
             .iter()
             .enumerate()
             .map(|(k, a)| (map.rotational_play(k) / a.step) as f32)
             .collect();
+        Ok(Self {
+            task: map.meta().task.clone(),
+            level: Level { axes, cells },
+            centre: None,
+            depth_range,
+            approach: map.meta().approach,
+            clearance: map.meta().clearance,
+            largest,
+            play,
+        })
+    }
+
+    /// Prepares `map` (file `path`) with its centre map `centre` (file `centre_path`),
+    /// which answers for the particles within its region.
+    ///
+    /// # Errors
+    /// As [`Lookup::new`], and when `centre` is not a centre map of `map`
+    /// ([`FtMap::check_centre`]).
+    pub fn with_centre(
+        map: &FtMap,
+        path: &Path,
+        centre: &FtMap,
+        centre_path: &Path,
+    ) -> Result<Self> {
+        let mut lookup = Self::new(map, path)?;
+        map.check_centre(centre).map_err(|e| FusionError::Map {
+            path: centre_path.to_owned(),
+            reason: e.to_string(),
+        })?;
+        let axes = axes_of(centre);
+        // Inserted where the map says so: one contact depth for both.
+        let (cells, largest) = padded(centre, lookup.depth_range, centre_path)?;
+        let mut scale = [1.0f32; MAX_AXES];
+        let mut offset = [0.0f32; MAX_AXES];
+        for (k, (a, c)) in lookup.level.axes.iter().zip(&axes).enumerate() {
+            scale[k] = (a.step / c.step) as f32;
+            offset[k] = ((a.min - c.min) / c.step) as f32;
+        }
+        for (l, c) in lookup.largest.iter_mut().zip(largest) {
+            *l = l.max(c);
+        }
+        lookup.centre = Some(Centre {
+            level: Level { axes, cells },
+            scale,
+            offset,
+        });
         Ok(lookup)
+    }
+
+    /// Whether a centre map answers for the particles near the goal.
+    pub fn has_centre(&self) -> bool {
+        self.centre.is_some()
     }
 
     /// The fit's rotational play of each axis (grid units, [`FtMap::rotational_play`]).
@@ -248,24 +277,24 @@ impl Lookup {
         &self.task
     }
 
-    /// Number of cells.
+    /// Number of cells (the centre map's included).
     pub fn cells(&self) -> usize {
-        self.cells.len()
+        self.level.cells.len() + self.centre.as_ref().map_or(0, |c| c.level.cells.len())
     }
 
     /// The axes in map order.
     pub fn axes(&self) -> &[MapAxis] {
-        &self.axes
+        &self.level.axes
     }
 
     /// The axes' DOF names (`object.x`, ...), in map order.
     pub fn dof_names(&self) -> Vec<String> {
-        self.axes.iter().map(|a| a.dof.to_string()).collect()
+        self.axes().iter().map(|a| a.dof.to_string()).collect()
     }
 
     /// Number of axes.
     pub fn ndim(&self) -> usize {
-        self.axes.len()
+        self.level.axes.len()
     }
 
     /// The largest force (N) and torque (N.m) magnitudes over the map's cells.
@@ -286,8 +315,7 @@ impl Lookup {
     /// Whether a contact at `height` (m) went in: below the middle of the depth channel's
     /// range (between resting on part B and inserted); never on a map without depth.
     pub fn inserted(&self, height: f64) -> bool {
-        self.depth_range
-            .is_some_and(|[lo, hi]| height < 0.5 * f64::from(lo + hi))
+        inserted(self.depth_range, height)
     }
 
     /// Whether a contact at `height` (m) rests more than `slack` below the highest contact
@@ -310,7 +338,7 @@ impl Lookup {
     pub fn relative(&self, pos: &[f32], tcp: &[f64; 6], out: &mut [f32]) {
         let n = pos.len() / self.ndim().max(1);
         if tcp[3..].iter().all(|r| *r == 0.0) {
-            for (k, a) in self.axes.iter().enumerate() {
+            for (k, a) in self.level.axes.iter().enumerate() {
                 let shift = a.tcp.map_or(0.0, |c| (tcp[c] / a.step) as f32);
                 for (o, &u) in out[k * n..(k + 1) * n]
                     .iter_mut()
@@ -329,14 +357,14 @@ impl Lookup {
         let t_tcp = Vector3::new(tcp[0], tcp[1], tcp[2]);
         for i in 0..n {
             let mut pose = [0.0f64; 6];
-            for (k, a) in self.axes.iter().enumerate() {
+            for (k, a) in self.level.axes.iter().enumerate() {
                 if a.dof.pose == Pose::Object {
                     pose[a.dof.axis.index()] = a.value(pos[k * n + i]);
                 }
             }
             let t = r_tcp * (Vector3::new(pose[0], pose[1], pose[2]) - t_tcp);
             let r = (r_tcp * Rotation3::new(Vector3::new(pose[3], pose[4], pose[5]))).scaled_axis();
-            for (k, a) in self.axes.iter().enumerate() {
+            for (k, a) in self.level.axes.iter().enumerate() {
                 out[k * n + i] = if a.dof.pose == Pose::Object && a.dof.axis != Axis::Z {
                     let c = a.dof.axis.index();
                     let v = if c < 3 { t[c] } else { r[c - 3] };
@@ -349,37 +377,23 @@ impl Lookup {
         }
     }
 
-    /// The padded channels at grid coordinates `u` (one per axis), multilinear, clamped.
+    /// The padded channels at grid coordinates `u` (one per axis), multilinear, clamped;
+    /// from the centre map within its region.
     pub fn at(&self, u: &[f32]) -> [f32; LANES] {
-        let mut out = [0.0; LANES];
         let n = u.len().min(self.ndim());
-        let mut base = 0;
-        let mut frac = [0.0f32; ftmap::task::omega::MAX_AXES];
-        for (k, a) in self.axes.iter().enumerate().take(n) {
-            let t = u[k].clamp(0.0, a.top());
-            let i = (t as usize).min(a.count.saturating_sub(2));
-            base += i * a.stride;
-            frac[k] = if a.count > 1 { t - i as f32 } else { 0.0 };
-        }
-        for corner in 0..1usize << n {
-            let mut w = 1.0f32;
-            let mut idx = base;
-            for (k, a) in self.axes.iter().enumerate().take(n) {
-                if corner >> k & 1 == 1 {
-                    w *= frac[k];
-                    idx += if a.count > 1 { a.stride } else { 0 };
-                } else {
-                    w *= 1.0 - frac[k];
-                }
-            }
-            if w != 0.0 {
-                for (o, v) in out.iter_mut().zip(&self.cells[idx]) {
-                    *o += w * v;
-                }
+        let t: Vec<f32> = (0..n)
+            .map(|k| u[k].clamp(0.0, self.level.axes[k].top()))
+            .collect();
+        if let Some(c) = &self.centre {
+            let f: Vec<f32> = (0..n).map(|k| t[k] * c.scale[k] + c.offset[k]).collect();
+            if f.iter()
+                .zip(&c.level.axes)
+                .all(|(&v, a)| (0.0..=a.top()).contains(&v))
+            {
+                return c.level.at(&f);
             }
         }
-        over_contacts(&mut out);
-        out
+        self.level.at(&t)
     }
 
     /// Writes -1/2 of the weighted squared residual (Eq. 3 in log space, constants
@@ -401,69 +415,60 @@ impl Lookup {
         dispatch!(1 2 3 4 5 6)
     }
 
-    /// Clamped grid parameters of `D` axes: (top, last lower index, stride, stride to the upper neighbour).
-    fn axis_params<const D: usize>(&self) -> ([f32; D], [usize; D], [usize; D], [usize; D]) {
-        let mut top = [0.0; D];
-        let mut lo_max = [0; D];
-        let mut stride = [0; D];
-        let mut up = [0; D];
-        for (k, a) in self.axes.iter().enumerate().take(D) {
-            top[k] = a.top();
-            lo_max[k] = a.count.saturating_sub(2);
-            stride[k] = a.stride;
-            up[k] = if a.count > 1 { a.stride } else { 0 };
+    /// The level that answers at the map's clamped coordinates `t`, and the coordinates on
+    /// it: the centre map within its region, else the map.
+    #[inline(always)]
+    fn level_at<'a, const D: usize>(
+        &'a self,
+        t: [f32; D],
+        params: &'a (Params<D>, Option<Params<D>>),
+    ) -> (&'a Level, &'a Params<D>, [f32; D]) {
+        if let (Some(c), Some(p)) = (&self.centre, &params.1) {
+            let mut f = [0.0f32; D];
+            let mut inside = true;
+            for k in 0..D {
+                f[k] = t[k] * c.scale[k] + c.offset[k];
+                inside &= f[k] >= 0.0 && f[k] <= p.top[k];
+            }
+            if inside {
+                return (&c.level, p, f);
+            }
         }
-        (top, lo_max, stride, up)
+        (&self.level, &params.0, t)
+    }
+
+    /// The lookup parameters of the map and of its centre map.
+    fn params<const D: usize>(&self) -> (Params<D>, Option<Params<D>>) {
+        (
+            self.level.params(),
+            self.centre.as_ref().map(|c| c.level.params()),
+        )
+    }
+
+    /// The map's clamped coordinates of particle `i` of `n` in `rel`.
+    #[inline(always)]
+    fn clamped<const D: usize>(rel: &[f32], n: usize, i: usize, top: &[f32; D]) -> [f32; D] {
+        std::array::from_fn(|k| rel[k * n + i].clamp(0.0, top[k]))
     }
 
     fn ll_nearest<const D: usize>(&self, rel: &[f32], w: &Weights, out: &mut [f32]) {
         let n = out.len();
-        let (top, _, stride, _) = self.axis_params::<D>();
+        let params = self.params::<D>();
         for (i, o) in out.iter_mut().enumerate() {
-            let mut idx = 0;
-            for k in 0..D {
-                let t = rel[k * n + i].clamp(0.0, top[k]);
-                idx += (t + 0.5) as usize * stride[k];
-            }
-            *o = w.log_likelihood(&self.cells[idx]);
+            let t = Self::clamped(rel, n, i, &params.0.top);
+            let (level, p, u) = self.level_at(t, &params);
+            let idx: usize = (0..D).map(|k| (u[k] + 0.5) as usize * p.stride[k]).sum();
+            *o = w.log_likelihood(&level.cells[idx]);
         }
     }
 
     fn ll_linear<const D: usize>(&self, rel: &[f32], w: &Weights, out: &mut [f32]) {
         let n = out.len();
-        let (top, lo_max, stride, up) = self.axis_params::<D>();
+        let params = self.params::<D>();
         for (i, o) in out.iter_mut().enumerate() {
-            let mut base = 0;
-            let mut frac = [0.0f32; D];
-            for k in 0..D {
-                let t = rel[k * n + i].clamp(0.0, top[k]);
-                let lo = (t as usize).min(lo_max[k]);
-                base += lo * stride[k];
-                frac[k] = t - lo as f32;
-            }
-            // Corner weights and indices by tensor expansion: 2 + 4 + .. + 2^D products.
-            let mut wts = [0.0f32; 1 << 6];
-            let mut idx = [0usize; 1 << 6];
-            wts[0] = 1.0;
-            idx[0] = base;
-            let mut len = 1;
-            for k in 0..D {
-                for j in 0..len {
-                    wts[j + len] = wts[j] * frac[k];
-                    idx[j + len] = idx[j] + up[k];
-                    wts[j] *= 1.0 - frac[k];
-                }
-                len *= 2;
-            }
-            let mut acc = [0.0f32; LANES];
-            for (wt, &c) in wts.iter().zip(&idx).take(1 << D) {
-                let cell = &self.cells[c];
-                for l in 0..LANES {
-                    acc[l] += wt * cell[l];
-                }
-            }
-            over_contacts(&mut acc);
-            *o = w.log_likelihood(&acc);
+            let t = Self::clamped(rel, n, i, &params.0.top);
+            let (level, p, u) = self.level_at(t, &params);
+            *o = w.log_likelihood(&level.linear(p, u));
         }
     }
 
@@ -471,7 +476,7 @@ impl Lookup {
         let n = out.len();
         let mut u = vec![0.0f32; self.ndim()];
         for (i, o) in out.iter_mut().enumerate() {
-            for (k, a) in self.axes.iter().enumerate() {
+            for (k, a) in self.level.axes.iter().enumerate() {
                 let t = rel[k * n + i].clamp(0.0, a.top());
                 u[k] = match interp {
                     Interpolation::Nearest => t.round(),
@@ -481,6 +486,158 @@ impl Lookup {
             *o = w.log_likelihood(&self.at(&u));
         }
     }
+}
+
+impl Level {
+    /// The lookup parameters of its first `D` axes.
+    fn params<const D: usize>(&self) -> Params<D> {
+        let mut p = Params {
+            top: [0.0; D],
+            lo_max: [0; D],
+            stride: [0; D],
+            up: [0; D],
+        };
+        for (k, a) in self.axes.iter().enumerate().take(D) {
+            p.top[k] = a.top();
+            p.lo_max[k] = a.count.saturating_sub(2);
+            p.stride[k] = a.stride;
+            p.up[k] = if a.count > 1 { a.stride } else { 0 };
+        }
+        p
+    }
+
+    /// Multilinear channels at coordinates `t` within the grid (`p`: its parameters).
+    #[inline(always)]
+    fn linear<const D: usize>(&self, p: &Params<D>, t: [f32; D]) -> [f32; LANES] {
+        let mut base = 0;
+        let mut frac = [0.0f32; D];
+        for k in 0..D {
+            let lo = (t[k] as usize).min(p.lo_max[k]);
+            base += lo * p.stride[k];
+            frac[k] = t[k] - lo as f32;
+        }
+        // Corner weights and indices by tensor expansion: 2 + 4 + .. + 2^D products.
+        let mut wts = [0.0f32; 1 << 6];
+        let mut idx = [0usize; 1 << 6];
+        wts[0] = 1.0;
+        idx[0] = base;
+        let mut len = 1;
+        for (&f, &up) in frac.iter().zip(&p.up) {
+            for j in 0..len {
+                wts[j + len] = wts[j] * f;
+                idx[j + len] = idx[j] + up;
+                wts[j] *= 1.0 - f;
+            }
+            len *= 2;
+        }
+        let mut acc = [0.0f32; LANES];
+        for (wt, &c) in wts.iter().zip(&idx).take(1 << D) {
+            let cell = &self.cells[c];
+            for l in 0..LANES {
+                acc[l] += wt * cell[l];
+            }
+        }
+        over_contacts(&mut acc);
+        acc
+    }
+
+    /// Multilinear channels at coordinates `t` within the grid, any number of axes.
+    fn at(&self, t: &[f32]) -> [f32; LANES] {
+        let mut out = [0.0; LANES];
+        let n = t.len().min(self.axes.len());
+        let mut base = 0;
+        let mut frac = [0.0f32; MAX_AXES];
+        for (k, a) in self.axes.iter().enumerate().take(n) {
+            let i = (t[k] as usize).min(a.count.saturating_sub(2));
+            base += i * a.stride;
+            frac[k] = if a.count > 1 { t[k] - i as f32 } else { 0.0 };
+        }
+        for corner in 0..1usize << n {
+            let mut w = 1.0f32;
+            let mut idx = base;
+            for (k, a) in self.axes.iter().enumerate().take(n) {
+                if corner >> k & 1 == 1 {
+                    w *= frac[k];
+                    idx += if a.count > 1 { a.stride } else { 0 };
+                } else {
+                    w *= 1.0 - frac[k];
+                }
+            }
+            if w != 0.0 {
+                for (o, v) in out.iter_mut().zip(&self.cells[idx]) {
+                    *o += w * v;
+                }
+            }
+        }
+        over_contacts(&mut out);
+        out
+    }
+}
+
+/// The axes of `map` in the filter's terms.
+fn axes_of(map: &FtMap) -> Vec<MapAxis> {
+    let grid = map.grid();
+    let symmetry = map.meta().symmetry;
+    grid.axes()
+        .iter()
+        .enumerate()
+        .map(|(k, a)| MapAxis {
+            dof: a.dof,
+            min: a.min,
+            step: a.step,
+            count: a.count,
+            stride: grid.stride(k),
+            // Object DOFs move with the TCP (particle pose - TCP pose); z is the approach
+            // axis, whose TCP value is the measured contact height, not a displacement.
+            tcp: (a.dof.pose == Pose::Object && a.dof.axis != Axis::Z)
+                .then_some(a.dof.axis.index()),
+            period: (a.dof == Dof::new(Pose::Object, Axis::Rz) && symmetry.is_some())
+                .then(|| (a.count - 1) as f32),
+        })
+        .collect()
+}
+
+/// The cells of `map` padded to [`LANES`], those where part A went in by `depth_range`
+/// masked, and the largest force and torque magnitudes; `path` names the file of a cell
+/// with a non-finite value.
+fn padded(
+    map: &FtMap,
+    depth_range: Option<[f32; 2]>,
+    path: &Path,
+) -> Result<(Vec<[f32; LANES]>, [f64; 2])> {
+    let cells = map.grid().cells();
+    let mut out = Vec::with_capacity(cells);
+    let mut largest = [0.0f64; 2];
+    for i in 0..cells {
+        let c = map.cell(i);
+        if let Some(ch) = c.iter().position(|v| !v.is_finite()) {
+            return Err(FusionError::Map {
+                path: path.to_owned(),
+                reason: format!(
+                    "cell {i} has a non-finite value in channel {}",
+                    ftmap::CHANNELS[ch]
+                ),
+            });
+        }
+        for (l, v) in largest.iter_mut().zip([&c[..3], &c[3..6]]) {
+            *l = l.max(f64::from(v.iter().map(|x| x * x).sum::<f32>().sqrt()));
+        }
+        let mut padded = [0.0; LANES];
+        padded[..NCH].copy_from_slice(c);
+        padded[CONTACT] = 1.0;
+        if inserted(depth_range, f64::from(c[NCH - 1])) {
+            padded[..NCH - 1].fill(0.0);
+            padded[CONTACT] = 0.0;
+        }
+        out.push(padded);
+    }
+    Ok((out, largest))
+}
+
+/// Whether a contact at `height` (m) went in on a map whose depth channel spans
+/// `depth_range`: below the middle of it; never on a map without depth.
+fn inserted(depth_range: Option<[f32; 2]>, height: f64) -> bool {
+    depth_range.is_some_and(|[lo, hi]| height < 0.5 * f64::from(lo + hi))
 }
 
 /// Renormalises an interpolated wrench over the contact corners (their weight is the

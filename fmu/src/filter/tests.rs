@@ -979,3 +979,69 @@ fn inputs_beyond_a_physical_magnitude_are_refused_by_name() {
         "{e:?}"
     );
 }
+
+#[test]
+fn a_centre_map_answers_within_its_region_and_the_map_beyond_it() {
+    let coarse = peg_map(2e-3, 5e-4, None).expect("map");
+    let centre = peg_map(5e-4, 1e-4, None).expect("centre map");
+    let both = Lookup::with_centre(&coarse, Path::new("m"), &centre, Path::new("c"))
+        .expect("a centre of the map");
+    assert!(both.has_centre());
+    let (map_alone, centre_alone) = (
+        Lookup::new(&coarse, Path::new("m")).expect("lookup"),
+        Lookup::new(&centre, Path::new("c")).expect("lookup"),
+    );
+    let measured = Weights::diagonal(
+        [0.0, 0.0, 50.0, 0.05, -0.1, 0.0, 0.01, 0.0],
+        [1.0, 1.0, 1.0, 1e4, 1e4, 1e4, 0.0, 0.0],
+    );
+    // Particles (x, y) in metres: two within the centre's ±0.5 mm, two beyond.
+    let points = [
+        [3.3e-4, -2.1e-4],
+        [-4.9e-4, 0.7e-4],
+        [1.3e-3, 4e-4],
+        [-6e-4, 0.0],
+    ];
+    let ll = |lookup: &Lookup, interp| {
+        let n = points.len();
+        let mut rel = vec![0.0f32; 2 * n];
+        for (i, p) in points.iter().enumerate() {
+            for k in 0..2 {
+                rel[k * n + i] = lookup.axes()[k].coord(p[k]);
+            }
+        }
+        let mut out = vec![0.0f32; n];
+        lookup.log_likelihood(interp, &rel, &measured, &mut out);
+        out
+    };
+    for interp in [Interpolation::Multilinear, Interpolation::Nearest] {
+        let (got, map, fine) = (
+            ll(&both, interp),
+            ll(&map_alone, interp),
+            ll(&centre_alone, interp),
+        );
+        // Within it the coordinates pass through the map's grid units: f32 rounding.
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(1.0);
+        assert!(
+            got[..2].iter().zip(&fine[..2]).all(|(a, b)| close(*a, *b)),
+            "{interp:?}: the centre's within it: {got:?} {fine:?}"
+        );
+        assert_eq!(got[2..], map[2..], "{interp:?}: the map's beyond it");
+        assert!(
+            map[..2].iter().zip(&fine[..2]).any(|(a, b)| !close(*a, *b)),
+            "{interp:?}: the grids differ there"
+        );
+    }
+    // A centre map of another task, or coarser than the map, is refused by name.
+    let mut meta = centre.meta().clone();
+    meta.task = "gear".into();
+    let foreign = ftmap::FtMap::zeros(centre.grid().clone(), meta);
+    let e = Lookup::with_centre(&coarse, Path::new("m"), &foreign, Path::new("c"))
+        .expect_err("another task's")
+        .to_string();
+    assert!(e.contains("task `gear`"), "{e}");
+    let e = Lookup::with_centre(&centre, Path::new("c"), &coarse, Path::new("m"))
+        .expect_err("coarser")
+        .to_string();
+    assert!(e.contains("coarser"), "{e}");
+}

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use harness::campaign::{CampaignOptions, Offsets, VisionMethod};
+use harness::campaign::{CampaignOptions, CentreMap, Offsets, VisionMethod};
 use harness::trial::Strategy;
 use harness::vision::Detector;
 use harness::world::WorldKind;
@@ -212,6 +212,14 @@ pub struct RunArgs {
     /// map computed from its CAD meshes and cached in target/maps/).
     #[arg(long)]
     pub map: Option<PathBuf>,
+    /// The map's centre map for the FMU, a finer map of the cells around the goal (default:
+    /// computed from the CAD meshes and cached with a computed map whose grid is too coarse
+    /// for the fit; none with --map).
+    #[arg(long, conflicts_with = "no_centre_map")]
+    pub centre_map: Option<PathBuf>,
+    /// No centre map, even where the grid is too coarse for the fit.
+    #[arg(long)]
+    pub no_centre_map: bool,
     /// Fuse the camera with the F/T sensor (experiment D): an image before the first contact
     /// and at every contact, its edge features handed to the FMU.
     #[arg(long)]
@@ -372,6 +380,11 @@ impl RunArgs {
             seed: self.seed,
             offsets,
             map: self.map,
+            centre_map: match (self.centre_map, self.no_centre_map) {
+                (Some(file), _) => CentreMap::File(file),
+                (None, true) => CentreMap::None,
+                (None, false) => CentreMap::Auto,
+            },
             vision: self.vision,
             vision_method: self.vision_method.into(),
             sigma_vision: self.sigma_vision,

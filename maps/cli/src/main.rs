@@ -71,6 +71,11 @@ enum Cmd {
         /// Compute only shard I of N (`I/N`, rotation cells split round-robin); join with `merge`.
         #[arg(long, value_parser = ftmap::process::parse_shard)]
         shard: Option<[usize; 2]>,
+        /// Also compute the map's centre map into this file, where Omega's step is too coarse
+        /// for the fit beside a rotation: a finer map of the cells around the goal, for the
+        /// FMU's `centre_map`.
+        #[arg(long, conflicts_with = "shard")]
+        centre: Option<PathBuf>,
         /// Fail when the GPU backend finds only a CPU adapter (e.g. lavapipe).
         #[arg(long, env = "FTMAP_REQUIRE_GPU")]
         require_gpu: bool,
@@ -230,8 +235,19 @@ fn main() -> Result<()> {
             model,
             out,
             shard,
+            centre,
             require_gpu,
-        } => cmd_generate(&task, backend, model.into(), &out, shard, require_gpu),
+        } => cmd_generate(
+            &task,
+            backend,
+            &GenerateOptions {
+                model: model.into(),
+                shard,
+            },
+            &out,
+            centre.as_deref(),
+            require_gpu,
+        ),
         Cmd::Info { file } => cmd_info(&file),
         Cmd::ExportCsv { file, out } => cmd_export_csv(&file, &out),
         Cmd::Plot {
@@ -448,9 +464,9 @@ fn make_backend(kind: BackendKind, require_gpu: bool) -> Result<Box<dyn DepthBac
 fn cmd_generate(
     task: &str,
     kind: BackendKind,
-    model: WrenchModel,
+    opts: &GenerateOptions,
     out: &Path,
-    shard: Option<[usize; 2]>,
+    centre: Option<&Path>,
     require_gpu: bool,
 ) -> Result<()> {
     let task = Task::find(task)?;
@@ -469,38 +485,44 @@ fn cmd_generate(
     for coarse in too_coarse(&grid, task.depth.pixel, clearance) {
         eprintln!("warning: {}: {coarse}", task.name);
     }
-    let total = shard_configs(&grid, shard);
-    let bar = ProgressBar::new(total as u64).with_style(
-        ProgressStyle::with_template(
-            "{spinner} {msg} [{bar:40}] {human_pos}/{human_len} configs, {per_sec}, eta {eta}",
-        )
-        .context("progress template")?
-        .progress_chars("=> "),
-    );
-    bar.set_message(format!("{} ({})", task.name, backend.name()));
-    let start = Instant::now();
     let (mesh_a, mesh_b) = (load_part(&task.part_a)?, load_part(&task.part_b)?);
-    let map = generate_with(
-        &task,
-        &mesh_a,
-        &mesh_b,
-        backend.as_ref(),
-        &GenerateOptions { model, shard },
-        &|n| bar.inc(n),
-    )?;
-    let secs = start.elapsed().as_secs_f64();
-    bar.finish_and_clear();
-    format::write_bytes(&format::encode(&map, shard), out)?;
-    println!(
-        "{}: {} configs in {:.2} s = {:.0} configs/s ({}, {:?} model) -> {}",
-        task.name,
-        total,
-        secs,
-        total as f64 / secs,
-        backend.name(),
-        model,
-        out.display()
-    );
+    let compute = |t: &Task, out: &Path| -> Result<()> {
+        let total = shard_configs(&t.grid()?, opts.shard);
+        let bar = ProgressBar::new(total as u64).with_style(
+            ProgressStyle::with_template(
+                "{spinner} {msg} [{bar:40}] {human_pos}/{human_len} configs, {per_sec}, eta {eta}",
+            )
+            .context("progress template")?
+            .progress_chars("=> "),
+        );
+        bar.set_message(format!("{} ({})", t.name, backend.name()));
+        let start = Instant::now();
+        let map = generate_with(t, &mesh_a, &mesh_b, backend.as_ref(), opts, &|n| bar.inc(n))?;
+        let secs = start.elapsed().as_secs_f64();
+        bar.finish_and_clear();
+        format::write_bytes(&format::encode(&map, opts.shard), out)?;
+        println!(
+            "{}: {} configs in {:.2} s = {:.0} configs/s ({}, {:?} model) -> {}",
+            t.name,
+            total,
+            secs,
+            total as f64 / secs,
+            backend.name(),
+            opts.model,
+            out.display()
+        );
+        Ok(())
+    };
+    compute(&task, out)?;
+    if let Some(file) = centre {
+        match ftmap::map::centre::centre_task(&task, &grid, clearance)? {
+            Some(c) => compute(&c, file)?,
+            None => println!(
+                "{}: no centre map: the grid resolves the fit (or its clearance is unknown)",
+                task.name
+            ),
+        }
+    }
     Ok(())
 }
 

@@ -404,6 +404,48 @@ fn a_grid_too_coarse_for_the_fit_is_warned_of_and_no_other() {
 }
 
 #[test]
+fn a_centre_map_is_computed_where_the_step_is_too_coarse_beside_a_rotation() {
+    let (dir, task) = scratch("centre");
+    let rotation = std::fs::read_to_string(&task)
+        .unwrap()
+        .replace("object = [\"x\", \"y\"]", "object = [\"x\", \"y\", \"rx\"]")
+        .replace("size_rot = 0.0", "size_rot = 0.017453292519943295");
+    let turned = dir.join("turned.toml");
+    std::fs::write(&turned, rotation).unwrap();
+    let (map, centre) = (dir.join("m.ftmap"), dir.join("c.ftmap"));
+    let path = |p: &Path| p.to_str().unwrap().to_owned();
+    let run = |t: &Path| {
+        ok(&[
+            "generate",
+            "--task",
+            &path(t),
+            "--out",
+            &path(&map),
+            "--centre",
+            &path(&centre),
+        ])
+    };
+    // x, y alone: the negative contact states the fit, no centre map.
+    assert!(run(&task).contains("no centre map"));
+    assert!(!centre.exists());
+    // Beside rx, the 0.5 mm step in tenths within the 0.05 mm clearance, over ±1 mm; the
+    // pixel the step, the rotation as the map's.
+    run(&turned);
+    let info = ok(&["info", &path(&centre)]);
+    for text in [
+        "object.x   -1.000 mm .. +1.000 mm step 0.050 mm (41 samples)",
+        "object.rx  -1.000 deg .. +1.000 deg step 0.500 deg (5 samples)",
+        "pixel 0.05 mm",
+    ] {
+        assert!(info.contains(text), "{text}: {info}");
+    }
+    let (m, _) = ftmap::map::format::load_any(&map).unwrap();
+    let (c, _) = ftmap::map::format::load_any(&centre).unwrap();
+    m.check_centre(&c).expect("a centre map of the map");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn a_reader_that_goes_away_ends_the_output_without_a_panic() {
     // `ftmap info F | head -1`: the reader closes the pipe before ftmap writes. Unix tools
     // end by SIGPIPE there; Rust's runtime ignores it, and printing then panicked.

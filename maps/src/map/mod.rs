@@ -8,6 +8,7 @@ use crate::task::omega::Grid;
 use crate::wrench::WrenchModel;
 
 pub mod blend;
+pub mod centre;
 pub mod format;
 pub mod resolution;
 

@@ -93,7 +93,8 @@ impl fmt::Display for Coarse {
                  cells where the part goes in fall between the grid's nodes (the FMU's negative \
                  contact states them exactly on maps over object.x, object.y and grip \
                  translations; with object rotations, only the part within the rotational \
-                 play the map shows); set the step <= {:.4} mm",
+                 play the map shows); set the step <= {:.4} mm, or give the FMU a centre map \
+                 (`ftmap generate --centre`, FMU parameter centre_map)",
                 step * mm,
                 gap * mm,
                 gap * mm

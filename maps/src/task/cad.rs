@@ -353,6 +353,32 @@ impl Geometry {
         offset[0].hypot(offset[1]) <= self.insertion_limit(offset[1].atan2(offset[0]))
     }
 
+    /// Whether part A goes in with part B at `offset` (m) off the TCP and turned by `yaw`
+    /// (rad) about the approach, by the geometry: round fits whatever the yaw; the octagon
+    /// where every corner of the peg lies within every flat of the hole (both convex prisms
+    /// along the approach).
+    pub fn inserts_turned(&self, offset: [f64; 2], yaw: f64) -> bool {
+        match *self {
+            Self::OctagonPeg {
+                peg_across_flats,
+                hole_across_flats,
+                ..
+            } => {
+                let eighth = PI / 4.0;
+                let corner = peg_across_flats / 2.0 / (PI / 8.0).cos();
+                (0..8).all(|k| {
+                    let a = PI / 8.0 + f64::from(k) * eighth;
+                    let v = [corner * a.cos() - offset[0], corner * a.sin() - offset[1]];
+                    (0..8).all(|j| {
+                        let n = f64::from(j) * eighth + yaw;
+                        n.cos() * v[0] + n.sin() * v[1] <= hole_across_flats / 2.0
+                    })
+                })
+            }
+            _ => self.inserts(offset),
+        }
+    }
+
     /// The smallest insertion limit over all directions, the fit's radial clearance (m):
     /// along +x, a flat normal of the octagon.
     pub fn clearance(&self) -> f64 {
@@ -1269,6 +1295,37 @@ mod tests {
                 (outer - inner) / MM
             );
         }
+    }
+
+    #[test]
+    fn a_turned_octagon_goes_in_within_its_yaw_play() {
+        let g = geometry("octagon");
+        // At zero offset a corner at R = a / cos(pi/8) meets the hole's flat a_h when
+        // R cos(pi/8 - play) = a_h: play = pi/8 - acos((a_h / a) cos(pi/8)), 0.70 degrees.
+        let (a, a_h) = (5.0 * MM, 5.025 * MM);
+        let play = PI / 8.0 - (a_h / a * (PI / 8.0).cos()).acos();
+        assert!(
+            (play.to_degrees() - 0.70).abs() < 0.01,
+            "{}",
+            play.to_degrees()
+        );
+        for sign in [1.0, -1.0] {
+            assert!(g.inserts_turned([0.0, 0.0], sign * 0.999 * play));
+            assert!(!g.inserts_turned([0.0, 0.0], sign * 1.001 * play));
+            // An eighth of a turn away is the same fit.
+            assert!(g.inserts_turned([0.0, 0.0], sign * 0.999 * play + PI / 4.0));
+        }
+        // Unturned: the insertion limit of every direction, either side of it.
+        for k in 0..16 {
+            let theta = f64::from(k) * TAU / 16.0 + 0.1;
+            let r = g.insertion_limit(theta);
+            let at = |s: f64| [s * r * theta.cos(), s * r * theta.sin()];
+            assert!(g.inserts_turned(at(0.999), 0.0), "{theta}");
+            assert!(!g.inserts_turned(at(1.001), 0.0), "{theta}");
+        }
+        // A round fit goes in at any yaw.
+        let peg = geometry("peg_in_hole");
+        assert!(peg.inserts_turned([0.01 * MM, 0.0], 0.3));
     }
 
     #[test]

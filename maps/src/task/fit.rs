@@ -34,6 +34,12 @@ pub trait Fit: Debug + Send + Sync {
         offset[0].hypot(offset[1]) <= self.insertion_limit(offset[1].atan2(offset[0]))
     }
 
+    /// Whether part A goes in with part B at `offset` (m) off the TCP and turned by `yaw`
+    /// (rad) about the approach; `None` where the fit is known at zero yaw only.
+    fn inserts_turned(&self, offset: [f64; 2], yaw: f64) -> Option<bool> {
+        (yaw == 0.0).then(|| self.inserts(offset))
+    }
+
     /// How far part B may sit off centre along `theta` with part A's tip still landing on a
     /// chamfer or in the hole (m): the insertion limit widened by the 45-degree chamfers.
     fn chamfer_reach(&self, theta: f64) -> f64 {
@@ -52,6 +58,10 @@ impl Fit for Geometry {
 
     fn clearance(&self) -> f64 {
         Geometry::clearance(self)
+    }
+
+    fn inserts_turned(&self, offset: [f64; 2], yaw: f64) -> Option<bool> {
+        Some(Geometry::inserts_turned(self, offset, yaw))
     }
 }
 
