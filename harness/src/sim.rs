@@ -327,8 +327,8 @@ impl Sim {
             if calm >= settle_steps {
                 if sweep.is_none() && z > entered {
                     let now = read(d);
-                    let settled = *first.get_or_insert(now);
-                    if settled.tcp[2] - z > DROP_DEPTH {
+                    let at_rest = *first.get_or_insert(now);
+                    if at_rest.tcp[2] - z > DROP_DEPTH {
                         break;
                     }
                     let change = (0..3).map(|k| (now.torque()[k] - calm_torque[k]).powi(2));

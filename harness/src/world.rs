@@ -190,6 +190,17 @@ impl MapWorld {
         ([c * d[0] + s * d[1], c * d[1] - s * d[0]], yaw)
     }
 
+    /// The yaw of rotation vector `rot`, refused on a map without one or where `rot` tilts.
+    fn yaw_of(&self, what: &str, rot: [f64; 3]) -> Result<f64> {
+        match self.yaw_period {
+            Some(_) if rot[0] == 0.0 && rot[1] == 0.0 => Ok(rot[2]),
+            Some(_) => Err(HarnessError::MapWorld(format!(
+                "its map turns about z only: {what} cannot tilt by {rot:?} rad"
+            ))),
+            None => no_rotation(what, rot).map(|()| 0.0),
+        }
+    }
+
     /// Whether part A goes in at `xy`.
     fn goes_in(&self, xy: [f64; 2]) -> bool {
         let (offset, yaw) = self.relative(xy);
@@ -223,19 +234,6 @@ impl MapWorld {
             settled: true,
             inserted,
             time: 0.0,
-        }
-    }
-}
-
-impl MapWorld {
-    /// The yaw of rotation vector `rot`, refused on a map without one or where `rot` tilts.
-    fn yaw_of(&self, what: &str, rot: [f64; 3]) -> Result<f64> {
-        match self.yaw_period {
-            Some(_) if rot[0] == 0.0 && rot[1] == 0.0 => Ok(rot[2]),
-            Some(_) => Err(HarnessError::MapWorld(format!(
-                "its map turns about z only: {what} cannot tilt by {rot:?} rad"
-            ))),
-            None => no_rotation(what, rot).map(|()| 0.0),
         }
     }
 }
