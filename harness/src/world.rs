@@ -282,8 +282,9 @@ impl World for MapWorld {
     /// Turns through the yaws from `from` to `to`, stopping where part A goes in; on a map
     /// without a yaw a twist that turns is refused, one that does not is a press.
     fn twist_motion(&mut self, xy: [f64; 2], from: f64, to: f64) -> Result<Contact> {
-        self.set_tcp_rotation([0.0, 0.0, from])?;
-        self.set_tcp_rotation([0.0, 0.0, to])?;
+        for yaw in [from, to] {
+            self.yaw_of("the TCP", [0.0, 0.0, yaw])?;
+        }
         let samples = ((to - from).abs() / TWIST_STEP).ceil() as usize;
         for k in 0..=samples {
             self.yaw[1] = from + (to - from) * k as f64 / samples.max(1) as f64;

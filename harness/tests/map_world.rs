@@ -10,7 +10,7 @@ mod common;
 
 use ftmap::Task;
 use harness::calibration::{Calibration, samples};
-use harness::campaign::{random_offsets, random_rotations, run_campaign};
+use harness::campaign::{random_offsets, run_campaign};
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::{Noise, map_wrench};
 use harness::trial::{Strategy, TrialConfig, Truth, Twist};
@@ -147,8 +147,7 @@ fn in_a_world_without_mismatch_the_defaults_insert_the_peg_in_two_and_a_half_con
 /// The octagon_yaw map as a world, its file, and the fit's radial clearance.
 fn octagon_yaw_world() -> (MapWorld, std::path::PathBuf, f64) {
     let task = Task::find("octagon_yaw").expect("task octagon_yaw");
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
-    let file = ftmap::generate::cached(&task, &dir).expect("the map").0;
+    let file = common::cached_map(&task);
     let (map, _) = ftmap::map::format::load_any(&file).expect("the map loads");
     let fit = task.fit().expect("fit");
     let c = fit.clearance();
@@ -222,16 +221,7 @@ fn without_mismatch_the_spread_over_a_yaw_is_calibrated() {
             ..Settings::default()
         },
     };
-    let grid = task.grid().expect("its grid");
-    let truths: Vec<Truth> = random_offsets(40, task.omega.size_trans, 5)
-        .into_iter()
-        .zip(random_rotations(40, grid.axes(), 5))
-        .map(|(object, rot)| Truth {
-            object,
-            rot,
-            ..Truth::default()
-        })
-        .collect();
+    let truths = common::turned_truths(&task, 40, 5);
     let results = run_campaign(&mut world, Some(&fmu), None, &cfg, &truths, 5).expect("runs");
     assert!(results.iter().all(|r| r.success), "every trial goes in");
     let measured = samples(&results);

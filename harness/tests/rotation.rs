@@ -5,20 +5,11 @@
 
 mod common;
 
-use ftmap::task::cad::Geometry;
-use harness::campaign::{random_offsets, random_rotations, run_campaign};
+use harness::campaign::run_campaign;
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::{Noise, map_wrench};
-use harness::trial::{Strategy, TrialConfig, Truth, Twist};
+use harness::trial::{Strategy, TrialConfig, Twist};
 use harness::world::World;
-
-/// A task's map computed from its CAD meshes, cached like a campaign's.
-fn cached_map(task: &ftmap::Task) -> std::path::PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
-    ftmap::generate::cached(task, &dir)
-        .expect("the map computed from CAD")
-        .0
-}
 
 /// `v` turned by `angle` about z.
 fn turned(v: [f64; 2], angle: f64) -> [f64; 2] {
@@ -79,7 +70,7 @@ fn an_eighth_of_a_turn_leaves_the_octagon_s_contact_as_it_was() {
 #[test]
 fn a_turned_octagon_reads_the_torque_its_map_predicts() {
     let (task, mut sim) = common::scene("octagon_yaw");
-    let (map, _) = ftmap::map::format::load_any(&cached_map(&task)).expect("the map loads");
+    let (map, _) = ftmap::map::format::load_any(&common::cached_map(&task)).expect("the map loads");
     // Rim contacts with part B turned (the TCP unturned): the map at (x, y, yaw).
     for (d, yaw) in [
         ([0.002, 0.0], 7.0),
@@ -105,14 +96,7 @@ fn near_the_hole_a_turned_octagon_reads_the_torque_of_its_polygons() {
     // (-0.050, 0.207) N.m for (-0.012, 0.198): the contacts' damping still held the load
     // by sphere count (20 % off, 25 % at 0.03 mm). Read once the torque has settled: 5-11 %.
     let (task, mut sim) = common::scene("octagon_yaw");
-    let &Geometry::OctagonPeg {
-        peg_across_flats,
-        hole_across_flats,
-        ..
-    } = task.geometry().expect("a [geometry]")
-    else {
-        panic!("octagon_yaw is an octagon");
-    };
+    let [peg_across_flats, hole_across_flats] = common::octagon_flats(&task);
     for (r, direction, yaw) in [
         (0.03e-3, 0.0, 2.0f64),
         (0.06e-3, 0.0, 2.0),
@@ -148,14 +132,7 @@ fn the_centre_map_follows_the_polygons_where_the_map_s_grid_cannot() {
     task.omega.size_rot = 2f64.to_radians();
     task.omega.delta_rot = 2f64.to_radians();
     task.omega.symmetry = None;
-    let &Geometry::OctagonPeg {
-        peg_across_flats,
-        hole_across_flats,
-        ..
-    } = task.geometry().expect("a [geometry]")
-    else {
-        panic!("octagon_yaw is an octagon");
-    };
+    let [peg_across_flats, hole_across_flats] = common::octagon_flats(&task);
     let grid = task.grid().expect("its grid");
     let clearance = (hole_across_flats - peg_across_flats) / 2.0;
     let centre_task = ftmap::map::centre::centre_task(&task, &grid, Some(clearance))
@@ -205,9 +182,8 @@ fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
     // x, y and the yaw over its whole period, force only, twists under force once x, y are
     // within the capture (100 trials: docs/RESULTS.md).
     let (task, mut sim) = common::scene("octagon_yaw");
-    let map = cached_map(&task);
+    let map = common::cached_map(&task);
     let (m, _) = ftmap::map::format::load_any(&map).expect("the map loads");
-    let grid = task.grid().expect("its grid");
     let play = m.rotational_play(2);
     assert!(
         play > 0.0 && play < 0.69f64.to_radians(),
@@ -235,17 +211,7 @@ fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
             ..Settings::default()
         },
     };
-    let offsets = random_offsets(5, task.omega.size_trans, 11);
-    let rotations = random_rotations(5, grid.axes(), 11);
-    let truths: Vec<Truth> = offsets
-        .iter()
-        .zip(&rotations)
-        .map(|(&object, &rot)| Truth {
-            object,
-            rot,
-            ..Truth::default()
-        })
-        .collect();
+    let truths = common::turned_truths(&task, 5, 11);
     let results = run_campaign(&mut sim, Some(&fmu), None, &cfg, &truths, 11).expect("runs");
     for r in &results {
         assert!(

@@ -262,11 +262,6 @@ impl Lookup {
         Ok(lookup)
     }
 
-    /// Whether a centre map answers for the particles near the goal.
-    pub fn has_centre(&self) -> bool {
-        self.centre.is_some()
-    }
-
     /// The fit's rotational play of each axis (grid units, [`FtMap::rotational_play`]).
     pub fn play(&self) -> &[f32] {
         &self.play
@@ -381,19 +376,22 @@ impl Lookup {
     /// from the centre map within its region.
     pub fn at(&self, u: &[f32]) -> [f32; LANES] {
         let n = u.len().min(self.ndim());
-        let t: Vec<f32> = (0..n)
-            .map(|k| u[k].clamp(0.0, self.level.axes[k].top()))
-            .collect();
+        let mut t = [0.0f32; MAX_AXES];
+        for (k, a) in self.level.axes.iter().enumerate().take(n) {
+            t[k] = u[k].clamp(0.0, a.top());
+        }
         if let Some(c) = &self.centre {
-            let f: Vec<f32> = (0..n).map(|k| t[k] * c.scale[k] + c.offset[k]).collect();
-            if f.iter()
-                .zip(&c.level.axes)
-                .all(|(&v, a)| (0.0..=a.top()).contains(&v))
-            {
-                return c.level.at(&f);
+            let mut f = [0.0f32; MAX_AXES];
+            let mut inside = true;
+            for (k, a) in c.level.axes.iter().enumerate().take(n) {
+                f[k] = t[k] * c.scale[k] + c.offset[k];
+                inside &= (0.0..=a.top()).contains(&f[k]);
+            }
+            if inside {
+                return c.level.at(&f[..n]);
             }
         }
-        self.level.at(&t)
+        self.level.at(&t[..n])
     }
 
     /// Writes -1/2 of the weighted squared residual (Eq. 3 in log space, constants

@@ -102,6 +102,40 @@ pub fn computed_peg_map() -> &'static FtMap {
     })
 }
 
+/// A task's map computed from its CAD meshes, cached like a campaign's (target/maps/).
+pub fn cached_map(task: &Task) -> std::path::PathBuf {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/maps");
+    ftmap::generate::cached(task, &dir)
+        .expect("the map computed from CAD")
+        .0
+}
+
+/// The peg's and the hole's widths across flats (m) of an octagon task.
+pub fn octagon_flats(task: &Task) -> [f64; 2] {
+    match *task.geometry().expect("a [geometry]") {
+        ftmap::task::cad::Geometry::OctagonPeg {
+            peg_across_flats,
+            hole_across_flats,
+            ..
+        } => [peg_across_flats, hole_across_flats],
+        _ => panic!("{} is not an octagon", task.name),
+    }
+}
+
+/// `n` random true offsets and rotations over `task`'s Omega (seed `seed`).
+pub fn turned_truths(task: &Task, n: usize, seed: u64) -> Vec<harness::trial::Truth> {
+    let grid = task.grid().expect("its grid");
+    harness::campaign::random_offsets(n, task.omega.size_trans, seed)
+        .into_iter()
+        .zip(harness::campaign::random_rotations(n, grid.axes(), seed))
+        .map(|(object, rot)| harness::trial::Truth {
+            object,
+            rot,
+            ..harness::trial::Truth::default()
+        })
+        .collect()
+}
+
 /// The bearing_housing task, its committed scene loaded for the camera, and its vision model
 /// with MuJoCo's camera.
 pub fn bearing() -> (Task, CameraScene, VisionModel) {
