@@ -23,8 +23,10 @@ use crate::calibration;
 use crate::error::{HarnessError, Result, create_dir};
 use crate::eye::Eye;
 use crate::fmu_driver::{Fmu, Settings, default_fmu_path};
+use crate::mismatch::{self, Given, Misses, Source};
 use crate::plot;
 use crate::report::{self, Pace, Summary};
+use crate::scene::scene_path;
 use crate::sensor::Noise;
 use crate::sim::Sim;
 use crate::trial::{Strategy, TrialConfig, TrialResult, Truth, Twist, run_trial, spiral};
@@ -126,6 +128,10 @@ pub struct CampaignOptions {
     pub mismatch: Option<f64>,
     /// FMU parameter `mismatch_angle` (rad).
     pub mismatch_angle: Option<f64>,
+    /// Measure the scene's misses against the map before the trials and hand them to the
+    /// FMU as `mismatch` and `mismatch_angle` where those are not given ([`mismatch`]).
+    #[serde(default)]
+    pub measure_mismatch: bool,
     /// FMU parameter `lost`.
     pub lost: Option<f64>,
     /// Where the contact motions happen.
@@ -175,6 +181,17 @@ pub enum SetupNote {
     VisionModel(PathBuf),
     /// The map is too coarse for the fit's clearance.
     Coarse(Coarse),
+    /// The scene's misses against the map, from the cache (`seconds: None`) or measured in
+    /// `seconds`, handed to the FMU as its `mismatch` and `mismatch_angle` where the user set
+    /// them not ([`mismatch`]).
+    Mismatch {
+        /// What the presses measured.
+        misses: Misses,
+        /// Seconds the presses took, when they were not cached.
+        seconds: Option<f64>,
+    },
+    /// The scene's misses could not be measured: the FMU's defaults stand.
+    MismatchUnmeasured(String),
 }
 
 impl fmt::Display for SetupNote {
@@ -206,6 +223,15 @@ impl fmt::Display for SetupNote {
                 path.display()
             ),
             Self::Coarse(coarse) => write!(f, "warning: {coarse}"),
+            Self::Mismatch { misses, seconds } => write!(
+                f,
+                "model mismatch of the scene against the map ({}): {misses}",
+                seconds.map_or("cached".into(), |s| format!("measured in {s:.1} s"))
+            ),
+            Self::MismatchUnmeasured(why) => write!(
+                f,
+                "model mismatch not measured ({why}): the FMU's defaults stand"
+            ),
         }
     }
 }
@@ -217,6 +243,8 @@ pub struct Outcome {
     pub results: Vec<TrialResult>,
     /// How long they took, on how many workers.
     pub pace: Pace,
+    /// The `mismatch` and `mismatch_angle` the FMU ran with (`None` without the FMU).
+    pub mismatch: Option<Given>,
 }
 
 /// A plot a campaign wrote.
@@ -333,32 +361,7 @@ impl Plan {
             Offsets::Random { trials, .. } => random_offsets(trials, size, self.options.seed),
             Offsets::Grid { points, .. } => grid_offsets(points, size),
         };
-        // The grid's own grip bound (the task's `size_grip`, its default resolved there).
-        let grip_bound = self.task.grid().ok().and_then(|g| {
-            g.axes()
-                .iter()
-                .find(|a| a.dof.pose == Pose::Grip)
-                .map(|a| a.max())
-        });
-        let grips = match grip_bound {
-            Some(bound) => random_offsets(objects.len(), bound, self.options.seed ^ GRIP_STREAM),
-            None => vec![[0.0; 2]; objects.len()],
-        };
-        let rotations = random_rotations(
-            objects.len(),
-            &self
-                .task
-                .grid()
-                .map(|g| g.axes().to_vec())
-                .unwrap_or_default(),
-            self.options.seed ^ ROTATION_STREAM,
-        );
-        objects
-            .into_iter()
-            .zip(grips)
-            .zip(rotations)
-            .map(|((object, grip), rot)| Truth { object, grip, rot })
-            .collect()
+        truths_at(&self.task, objects, self.options.seed)
     }
 
     /// Writes `<out>/trials.csv`, `measurements.csv`, `first_images.csv` (with a camera: the
@@ -387,7 +390,8 @@ impl Plan {
             self.options.vision,
             &outcome.results,
             outcome.pace,
-        );
+        )
+        .with_mismatch(outcome.mismatch);
         report::write_summary(&out.join("summary.json"), &summary)?;
         Ok(summary)
     }
@@ -536,8 +540,24 @@ impl Campaign {
                 WorldSource::Map(Box::new(world_map), fit.clone())
             }
         };
-        let world = source.open(task)?;
+        let mut world = source.open(task)?;
         let mut config = trial_config(&plan, fit.as_ref(), map, centre)?;
+        if options.measure_mismatch && options.strategy == Strategy::Pf {
+            match source {
+                WorldSource::Mujoco => {
+                    measure_mismatch(
+                        &plan,
+                        world.as_mut(),
+                        fit.clone(),
+                        &mut config.settings,
+                        note,
+                    )?;
+                }
+                WorldSource::Map(..) => note(SetupNote::MismatchUnmeasured(
+                    "the world is the map: it misses nothing".into(),
+                )),
+            }
+        }
         let eye = open_eye(options, task, &mut config, note)?;
         let fmu = match options.strategy {
             Strategy::Pf => {
@@ -611,7 +631,24 @@ impl Campaign {
         Ok(Outcome {
             results: results?,
             pace: Pace { wall, jobs },
+            mismatch: self.fmu.is_some().then(|| self.mismatch_given()),
         })
+    }
+}
+
+impl Campaign {
+    /// The `mismatch` and `mismatch_angle` the FMU runs with, by where they came from.
+    fn mismatch_given(&self) -> Given {
+        let source = |user: Option<f64>, used: Option<f64>| match (user, used) {
+            (Some(v), _) => Source::Given(v),
+            (None, Some(v)) => Source::Measured(v),
+            (None, None) => Source::Default,
+        };
+        let (options, settings) = (&self.plan.options, &self.config.settings);
+        Given {
+            along: source(options.mismatch, settings.mismatch),
+            across: source(options.mismatch_angle, settings.mismatch_angle),
+        }
     }
 }
 
@@ -733,6 +770,119 @@ fn twist_setup(task: &Task, fit: &dyn Fit, map: Option<&Path>) -> Result<Option<
             .symmetry
             .map(|n| std::f64::consts::TAU / f64::from(n)),
     }))
+}
+
+/// Presses per set of true offsets the scene's misses are measured at ([`mismatch`]).
+const MISMATCH_PRESSES: usize = 48;
+/// Seed of the true offsets the misses are measured at, the same for every campaign (its
+/// shards and workers alike).
+const MISMATCH_SEED: u64 = 0x6d69_7373;
+/// Revision of the measured misses' file: a cached file of another is measured again.
+const MISMATCH_REVISION: u32 = 2;
+/// Half width of the square near the goal whose true offsets stand for the later contacts,
+/// in the map's grid steps (a first contact leaves the estimate about a step off).
+const NEAR_STEPS: f64 = 2.0;
+
+/// Measures the scene's misses against the map the FMU reads ([`mismatch::measure`], cached
+/// in target/maps/ under the files they depend on) and sets the FMU's `mismatch` and `mismatch_angle` that the user left unset from them; where
+/// the map world cannot read the map (tilts) or no press rested with a torque, says so and
+/// leaves the FMU's defaults.
+///
+/// # Errors
+/// When the map cannot be had or loaded, or the scene cannot take a true offset.
+fn measure_mismatch(
+    plan: &Plan,
+    scene: &mut dyn World,
+    fit: Arc<dyn Fit>,
+    settings: &mut Settings,
+    note: &mut dyn FnMut(SetupNote),
+) -> Result<()> {
+    if settings.mismatch.is_some() && settings.mismatch_angle.is_some() {
+        return Ok(());
+    }
+    let file = match &settings.map {
+        Some(m) => m.clone(),
+        None => cached_map(&plan.task, note)?,
+    };
+    let (map, _) = format::load_any(&file)?;
+    let step = map
+        .grid()
+        .axis_of(ftmap::Dof::new(Pose::Object, Axis::X))
+        .map(|k| map.grid().axes()[k].step);
+    let (mut world, step) = match (MapWorld::new(map, fit), step) {
+        (Ok(w), Some(step)) => (w, step),
+        (Err(e), _) => {
+            note(SetupNote::MismatchUnmeasured(e.to_string()));
+            return Ok(());
+        }
+        (_, None) => {
+            note(SetupNote::MismatchUnmeasured(
+                "the map has no object.x".into(),
+            ));
+            return Ok(());
+        }
+    };
+    let cache = mismatch_cache(plan, &file)?;
+    let cached = std::fs::read_to_string(&cache)
+        .ok()
+        .and_then(|text| serde_json::from_str::<Misses>(&text).ok());
+    let t0 = Instant::now();
+    let (misses, seconds) = match cached {
+        Some(misses) => (misses, None),
+        None => {
+            let draw = |half_width: f64, seed: u64| {
+                let objects = random_offsets(MISMATCH_PRESSES, half_width, seed);
+                truths_at(&plan.task, objects, seed)
+            };
+            let omega = draw(plan.half_width(), MISMATCH_SEED);
+            let near = draw(NEAR_STEPS * step, MISMATCH_SEED ^ 1);
+            let misses = mismatch::measure(scene, &mut world, &omega, &near)?;
+            create_dir(&maps_dir())?;
+            let text =
+                serde_json::to_string_pretty(&misses).map_err(|source| HarnessError::Json {
+                    path: cache.clone(),
+                    source,
+                })?;
+            std::fs::write(&cache, text).map_err(|e| HarnessError::io(&cache, e))?;
+            (misses, Some(t0.elapsed().as_secs_f64()))
+        }
+    };
+    let pooled = misses.pooled();
+    if pooled.presses == 0 {
+        note(SetupNote::MismatchUnmeasured(
+            "no press rested with a torque".into(),
+        ));
+        return Ok(());
+    }
+    settings.mismatch.get_or_insert(pooled.along);
+    settings.mismatch_angle.get_or_insert(pooled.across);
+    note(SetupNote::Mismatch { misses, seconds });
+    Ok(())
+}
+
+/// The cache file of a campaign's measured misses against the map file `map`: named by the
+/// hash of what they depend on (the task, its meshes and scene, the map, the presses' half
+/// width and the harness's version).
+fn mismatch_cache(plan: &Plan, map: &Path) -> Result<PathBuf> {
+    let task = &plan.task;
+    let hash = ftmap::file::cache_hash(
+        &[
+            &task.path,
+            &task.part_a.mesh,
+            &task.part_b.mesh,
+            &scene_path(task),
+            map,
+        ],
+        &[
+            env!("CARGO_PKG_VERSION").as_bytes(),
+            &plan.half_width().to_le_bytes(),
+            &MISMATCH_PRESSES.to_le_bytes(),
+            &MISMATCH_SEED.to_le_bytes(),
+            &NEAR_STEPS.to_le_bytes(),
+            &MISMATCH_REVISION.to_le_bytes(),
+        ],
+    )?;
+    Ok(maps_dir().join(format!("{}-{hash}.mismatch.json", task.name)))
 }
 
 /// The trial limits and FMU settings of a campaign, with the FT-Map file `map`.
@@ -887,6 +1037,28 @@ pub fn random_rotations(n: usize, axes: &[GridAxis], seed: u64) -> Vec<[f64; 3]>
             }
             r
         })
+        .collect()
+}
+
+/// Each of the object offsets `objects` with a grip offset and a rotation of part B drawn
+/// from `seed` over what the task's grid leaves uncertain (none where it is certain).
+fn truths_at(task: &Task, objects: Vec<[f64; 2]>, seed: u64) -> Vec<Truth> {
+    let axes = task.grid().map(|g| g.axes().to_vec()).unwrap_or_default();
+    // The grid's own grip bound (the task's `size_grip`, its default resolved there).
+    let grip_bound = axes
+        .iter()
+        .find(|a| a.dof.pose == Pose::Grip)
+        .map(|a| a.max());
+    let grips = match grip_bound {
+        Some(bound) => random_offsets(objects.len(), bound, seed ^ GRIP_STREAM),
+        None => vec![[0.0; 2]; objects.len()],
+    };
+    let rotations = random_rotations(objects.len(), &axes, seed ^ ROTATION_STREAM);
+    objects
+        .into_iter()
+        .zip(grips)
+        .zip(rotations)
+        .map(|((object, grip), rot)| Truth { object, grip, rot })
         .collect()
 }
 

@@ -27,6 +27,7 @@ pub mod error;
 pub mod eye;
 pub mod fmu_driver;
 pub mod fmu_log;
+pub mod mismatch;
 pub mod plot;
 pub mod render;
 pub mod report;

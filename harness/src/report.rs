@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::calibration::{self, Calibration, Sample};
 use crate::error::{HarnessError, Result};
+use crate::mismatch::Given;
 use crate::trial::{Step, Strategy, TrialResult};
 use crate::world::WorldKind;
 
@@ -83,6 +84,9 @@ pub struct Summary {
     pub grip: Option<GripSummary>,
     /// The rotation estimate, where part B's rotations were uncertain.
     pub rotation: Option<RotationSummary>,
+    /// The FMU's `mismatch` and `mismatch_angle` and where they came from (`None` without
+    /// the FMU).
+    pub mismatch: Option<Given>,
 }
 
 /// How well a campaign found the grip offsets.
@@ -326,10 +330,16 @@ pub fn summarize(
         inserted_by_twist: inserted_by(results, |s| s.twist),
         grip: GripSummary::of(results, &samples),
         rotation: RotationSummary::of(results, &samples),
+        mismatch: None,
     }
 }
 
 impl Summary {
+    /// The summary of a campaign whose FMU ran with `mismatch`.
+    pub fn with_mismatch(self, mismatch: Option<Given>) -> Self {
+        Self { mismatch, ..self }
+    }
+
     /// "`made` of N contact motions, `inserted` of them inserted the part".
     fn motions(&self, made: usize, inserted: usize) -> String {
         format!(
@@ -397,6 +407,11 @@ impl Summary {
             (
                 "object.y_std after the first contact",
                 mm(self.y_std_first_contact),
+            ),
+            (
+                "the FMU's model mismatch",
+                self.mismatch
+                    .map_or("n/a (no estimator)".to_owned(), |m| m.to_string()),
             ),
             (
                 "true offset within 1 / 2 sigma",

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::campaign::{CampaignOptions, Outcome, Plan, shard_indices};
 use crate::error::{HarnessError, Result, create_dir};
+use crate::mismatch::Given;
 use crate::report::Pace;
 use crate::trial::TrialResult;
 
@@ -38,6 +39,10 @@ pub struct Shard {
     pub pace: Pace,
     /// The FMU's trace of trial 0 (`trace.csv`), in the shard that ran it with a trace.
     pub trace: Option<String>,
+    /// The `mismatch` and `mismatch_angle` its FMU ran with (absent in shards written
+    /// before they were recorded).
+    #[serde(default)]
+    pub mismatch: Option<Given>,
 }
 
 impl Shard {
@@ -65,6 +70,7 @@ impl Shard {
                 .collect(),
             pace: outcome.pace,
             trace,
+            mismatch: outcome.mismatch,
         })
     }
 
@@ -129,15 +135,21 @@ pub fn merge(shards: Vec<Shard>, out: &Path) -> Result<(CampaignOptions, Outcome
         ..s.options.clone()
     };
     let (options, trials, [first_i, n]) = (campaign(first), first.trials, first.shard);
+    let mismatch = first.mismatch;
     let mut seen = vec![false; n];
     let mut results: Vec<Option<TrialResult>> = vec![None; trials];
     let mut trace = None;
     let (mut wall, mut jobs) = (0.0f64, 0);
     for s in shards {
         let [i, m] = s.shard;
-        if campaign(&s) != options || s.trials != trials || m != n || i >= n {
+        if campaign(&s) != options
+            || s.trials != trials
+            || m != n
+            || i >= n
+            || s.mismatch != mismatch
+        {
             return Err(bad(format!(
-                "shard {i}/{m} ran another campaign or split than shard {first_i}/{n} (options, trial count and N must agree)"
+                "shard {i}/{m} ran another campaign or split than shard {first_i}/{n} (options, trial count, N and the FMU's mismatch must agree)"
             )));
         }
         if std::mem::replace(&mut seen[i], true) {
@@ -172,6 +184,7 @@ pub fn merge(shards: Vec<Shard>, out: &Path) -> Result<(CampaignOptions, Outcome
         Outcome {
             results,
             pace: Pace { wall, jobs },
+            mismatch,
         },
         trace,
     ))
@@ -181,6 +194,7 @@ pub fn merge(shards: Vec<Shard>, out: &Path) -> Result<(CampaignOptions, Outcome
 mod tests {
     use super::*;
     use crate::campaign::Offsets;
+    use crate::mismatch::Source;
 
     /// A result whose figures need all 17 digits of an f64.
     fn result(k: usize) -> TrialResult {
@@ -230,6 +244,10 @@ mod tests {
                 jobs: 2,
             },
             trace: (i == 0).then(|| "trace".into()),
+            mismatch: Some(Given {
+                along: Source::Measured(0.022),
+                across: Source::Given(0.011),
+            }),
         }
     }
 
@@ -247,6 +265,7 @@ mod tests {
         assert_eq!(outcome.results, (0..5).map(result).collect::<Vec<_>>());
         assert_eq!(outcome.pace, Pace { wall: 3.0, jobs: 6 });
         assert_eq!(trace.as_deref(), Some("trace"));
+        assert_eq!(outcome.mismatch, shard(0, 3).mismatch);
         assert_eq!((options.out, options.shard), (PathBuf::from("m"), None));
     }
 
@@ -263,6 +282,9 @@ mod tests {
         let mut other_seed = shard(1, 2);
         other_seed.options.seed = 5;
         assert!(refused(vec![shard(0, 2), other_seed]).contains("another campaign"));
+        let mut other_mismatch = shard(1, 2);
+        other_mismatch.mismatch = None;
+        assert!(refused(vec![shard(0, 2), other_mismatch]).contains("the FMU's mismatch"));
         let mut stray = shard(1, 2);
         stray.results.push((2, result(2)));
         assert!(refused(vec![shard(0, 2), stray]).contains("holds trial 2"));

@@ -1,6 +1,7 @@
 //! One table of many campaigns (`harness table`): per campaign folder, the task, its
 //! uncertain DOFs, the trials, the success rate, contacts per trial (mean, median, p95,
-//! max) and the last approach's error per DOF, read back from its `summary.json`.
+//! max), the calibration of the reported spreads and the last approach's error per DOF,
+//! read back from its `summary.json`.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -27,6 +28,33 @@ pub struct CampaignRow {
     pub vision: bool,
     /// The last approach's error per DOF.
     pub final_errors: Vec<DofError>,
+    /// How well the reported spreads held the truth (absent without the estimator, and in
+    /// summaries written before the table showed it).
+    #[serde(default)]
+    pub calibration: Option<CalibrationRow>,
+}
+
+/// What the table reads of a summary's calibration.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+pub struct CalibrationRow {
+    /// Fraction of contact measurements whose truth lay within the 2-sigma ellipse.
+    pub within_2sigma: f64,
+    /// Mean NEES.
+    pub nees_mean: f64,
+    /// Its ideal, the DOF count.
+    pub nees_ideal: f64,
+}
+
+impl fmt::Display for CalibrationRow {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{:.1} %, {:.2} ({})",
+            100.0 * self.within_2sigma,
+            self.nees_mean,
+            self.nees_ideal
+        )
+    }
 }
 
 impl CampaignRow {
@@ -68,15 +96,15 @@ impl fmt::Display for CampaignTable {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "| campaign | task | DOFs | sensors | trials | success | contacts mean / median / p95 / max | final |error| mean / max per DOF |"
+            "| campaign | task | DOFs | sensors | trials | success | contacts mean / median / p95 / max | within 2 sigma, NEES (ideal) | final |error| mean / max per DOF |"
         )?;
-        writeln!(f, "|---|---|---|---|---|---|---|---|")?;
+        writeln!(f, "|---|---|---|---|---|---|---|---|---|")?;
         for (dir, r) in &self.rows {
             let c = &r.contacts;
             let errors: Vec<String> = r.final_errors.iter().map(DofError::text).collect();
             writeln!(
                 f,
-                "| {} | {} | {} | {} | {} | {:.1} % | {:.2} / {} / {} / {} | {} |",
+                "| {} | {} | {} | {} | {} | {:.1} % | {:.2} / {} / {} / {} | {} | {} |",
                 dir.display(),
                 r.task,
                 r.dofs.join(", "),
@@ -87,6 +115,7 @@ impl fmt::Display for CampaignTable {
                 c.median,
                 c.p95,
                 c.max,
+                r.calibration.map_or("n/a".to_owned(), |c| c.to_string()),
                 errors.join("; ")
             )?;
         }
@@ -107,12 +136,14 @@ mod tests {
             "contacts": {"mean": 5.5, "median": 5.0, "p95": 9.0, "max": 9.0},
             "final_errors": [{"dof": "object.x", "mean": 1.2e-5, "max": 2.0e-5},
                              {"dof": "object.rz", "mean": 0.001, "max": 0.004}],
+            "calibration": {"measurements": 20, "within_1sigma": 0.4, "within_2sigma": 0.85,
+                            "per_dof": [], "nees_mean": 2.456, "nees_ideal": 3.0},
             "world": "mujoco"}"#;
         std::fs::write(dir.join("summary.json"), json).expect("write");
         let table = CampaignTable::read(std::slice::from_ref(&dir)).expect("reads");
         let text = table.to_string();
         let line = text.lines().nth(2).expect("one row");
-        assert!(line.contains("| octagon_yaw | object.x, object.y, object.rz | F/T | 4 | 75.0 % | 5.50 / 5 / 9 / 9 |"), "{line}");
+        assert!(line.contains("| octagon_yaw | object.x, object.y, object.rz | F/T | 4 | 75.0 % | 5.50 / 5 / 9 / 9 | 85.0 %, 2.46 (3) |"), "{line}");
         assert!(
             line.contains("object.x 0.0120 / 0.0200 mm; object.rz 0.057 / 0.229 deg"),
             "{line}"

@@ -91,6 +91,29 @@ pub fn read_regular(path: &Path, max: u64, what: &'static str) -> Result<Vec<u8>
     Ok(out)
 }
 
+/// The name of a cache entry: the first 8 bytes, in hex, of the SHA-256 of the files `files`
+/// (their bytes, in order), the crate's version and `extra` (what else the entry depends
+/// on).
+///
+/// # Errors
+/// [`MapError::Io`] when a file cannot be read.
+pub fn cache_hash(files: &[&Path], extra: &[&[u8]]) -> Result<String> {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    for f in files {
+        h.update(std::fs::read(f).map_err(MapError::io(f))?);
+    }
+    h.update(env!("CARGO_PKG_VERSION"));
+    for e in extra {
+        h.update(e);
+    }
+    Ok(h.finalize()
+        .iter()
+        .take(8)
+        .map(|b| format!("{b:02x}"))
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -146,20 +146,10 @@ pub fn cached_centre(task: &Task, map: &FtMap, dir: &Path) -> Result<Option<(Pat
 
 /// The map of `computed` cached under the files of `task` and `suffix` in `dir`.
 fn cached_as(computed: &Task, task: &Task, suffix: &str, dir: &Path) -> Result<(PathBuf, bool)> {
-    use sha2::{Digest, Sha256};
-    let mut h = Sha256::new();
-    for f in [&task.path, &task.part_a.mesh, &task.part_b.mesh] {
-        h.update(std::fs::read(f).map_err(MapError::io(f))?);
-    }
-    h.update(env!("CARGO_PKG_VERSION"));
-    h.update(MAP_REVISION.to_le_bytes());
-    h.update(suffix);
-    let hash: String = h
-        .finalize()
-        .iter()
-        .take(8)
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    let hash = crate::file::cache_hash(
+        &[&task.path, &task.part_a.mesh, &task.part_b.mesh],
+        &[&MAP_REVISION.to_le_bytes(), suffix.as_bytes()],
+    )?;
     let path = dir.join(format!("{}-{hash}{suffix}.ftmap", task.name));
     if path.is_file() && crate::map::format::load(&path).is_ok() {
         return Ok((path, false));

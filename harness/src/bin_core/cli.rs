@@ -280,6 +280,10 @@ pub struct RunArgs {
     /// FMU parameter `mismatch_angle` (rad: how far the map may miss their directions).
     #[arg(long)]
     pub mismatch_angle: Option<f64>,
+    /// Measure the scene's misses against the map before the trials (96 presses, cached) and
+    /// hand them to the FMU as `mismatch` and `mismatch_angle` where those are not given.
+    #[arg(long)]
+    pub measure_mismatch: bool,
     /// FMU parameter `lost` (prior probability per measurement that the particles lost the
     /// truth; 0: never redraw).
     #[arg(long)]
@@ -404,6 +408,7 @@ impl RunArgs {
             sigma_depth: self.sigma_depth,
             mismatch: self.mismatch,
             mismatch_angle: self.mismatch_angle,
+            measure_mismatch: self.measure_mismatch,
             lost: self.lost,
             world: match self.world {
                 WorldArg::Mujoco => WorldKind::Mujoco,
