@@ -182,8 +182,8 @@ pub enum SetupNote {
     /// The map is too coarse for the fit's clearance.
     Coarse(Coarse),
     /// The scene's misses against the map, from the cache (`seconds: None`) or measured in
-    /// `seconds`, handed to the FMU as its `mismatch` and `mismatch_angle` where the user set
-    /// them not ([`mismatch`]).
+    /// `seconds`, handed to the FMU as its `mismatch` and `mismatch_angle` where the user did
+    /// not set them ([`mismatch`]).
     Mismatch {
         /// What the presses measured.
         misses: Misses,
@@ -784,9 +784,10 @@ const MISMATCH_REVISION: u32 = 2;
 const NEAR_STEPS: f64 = 2.0;
 
 /// Measures the scene's misses against the map the FMU reads ([`mismatch::measure`], cached
-/// in target/maps/ under the files they depend on) and sets the FMU's `mismatch` and `mismatch_angle` that the user left unset from them; where
-/// the map world cannot read the map (tilts) or no press rested with a torque, says so and
-/// leaves the FMU's defaults.
+/// in target/maps/ under the files they depend on) and sets from them those of the FMU's
+/// `mismatch` and `mismatch_angle` that the user left unset; where the map world cannot
+/// read the map (tilts) or no press rested with a torque, says so and leaves the FMU's
+/// defaults.
 ///
 /// # Errors
 /// When the map cannot be had or loaded, or the scene cannot take a true offset.
