@@ -634,9 +634,7 @@ impl Campaign {
             mismatch: self.fmu.is_some().then(|| self.mismatch_given()),
         })
     }
-}
 
-impl Campaign {
     /// The `mismatch` and `mismatch_angle` the FMU runs with, by where they came from.
     fn mismatch_given(&self) -> Given {
         let source = |user: Option<f64>, used: Option<f64>| match (user, used) {
@@ -805,32 +803,32 @@ fn measure_mismatch(
         Some(m) => m.clone(),
         None => cached_map(&plan.task, note)?,
     };
-    let (map, _) = format::load_any(&file)?;
-    let step = map
-        .grid()
-        .axis_of(ftmap::Dof::new(Pose::Object, Axis::X))
-        .map(|k| map.grid().axes()[k].step);
-    let (mut world, step) = match (MapWorld::new(map, fit), step) {
-        (Ok(w), Some(step)) => (w, step),
-        (Err(e), _) => {
-            note(SetupNote::MismatchUnmeasured(e.to_string()));
-            return Ok(());
-        }
-        (_, None) => {
-            note(SetupNote::MismatchUnmeasured(
-                "the map has no object.x".into(),
-            ));
-            return Ok(());
-        }
-    };
     let cache = mismatch_cache(plan, &file)?;
     let cached = std::fs::read_to_string(&cache)
         .ok()
         .and_then(|text| serde_json::from_str::<Misses>(&text).ok());
-    let t0 = Instant::now();
     let (misses, seconds) = match cached {
         Some(misses) => (misses, None),
         None => {
+            let t0 = Instant::now();
+            let (map, _) = format::load_any(&file)?;
+            let step = map
+                .grid()
+                .axis_of(ftmap::Dof::new(Pose::Object, Axis::X))
+                .map(|k| map.grid().axes()[k].step);
+            let (mut world, step) = match (MapWorld::new(map, fit), step) {
+                (Ok(w), Some(step)) => (w, step),
+                (Err(e), _) => {
+                    note(SetupNote::MismatchUnmeasured(e.to_string()));
+                    return Ok(());
+                }
+                (_, None) => {
+                    note(SetupNote::MismatchUnmeasured(
+                        "the map has no object.x".into(),
+                    ));
+                    return Ok(());
+                }
+            };
             let draw = |half_width: f64, seed: u64| {
                 let objects = random_offsets(MISMATCH_PRESSES, half_width, seed);
                 truths_at(&plan.task, objects, seed)

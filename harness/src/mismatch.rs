@@ -20,7 +20,7 @@ use crate::world::World;
 
 /// Torques smaller than this (N m) have no direction to compare: five times the typical
 /// sensor's noise.
-pub const MIN_TORQUE: f64 = 5.0 * Noise::TYPICAL.torque;
+const MIN_TORQUE: f64 = 5.0 * Noise::TYPICAL.torque;
 
 /// Median of chi^2 with one degree of freedom: sqrt(median(x^2) / this) is the standard
 /// deviation of a zero-mean Gaussian x.
@@ -30,7 +30,7 @@ const MEDIAN_CHI2_1: f64 = 0.454_936_423;
 const MEDIAN_RAYLEIGH: f64 = 1.177_410_023;
 
 /// The robust scales of a set of presses' misses.
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Scales {
     /// Standard deviation of the share of the measured torque's size the map misses.
     pub along: f64,
@@ -114,11 +114,10 @@ impl fmt::Display for Misses {
 
 /// A value of `mismatch` or `mismatch_angle` a campaign's FMU ran with, by where it came
 /// from.
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Source {
     /// The FMU's default.
-    #[default]
     Default,
     /// Set by the user.
     Given(f64),
@@ -127,14 +126,6 @@ pub enum Source {
 }
 
 impl Source {
-    /// The value handed to the FMU, `None` for its default.
-    pub fn value(self) -> Option<f64> {
-        match self {
-            Self::Default => None,
-            Self::Given(v) | Self::Measured(v) => Some(v),
-        }
-    }
-
     /// The value, as `shown` writes it, and its source.
     fn text(self, shown: impl Fn(f64) -> String) -> String {
         match self {
@@ -147,7 +138,7 @@ impl Source {
 
 /// The `mismatch` and `mismatch_angle` a campaign's FMU ran with (`summary.json`'s
 /// `mismatch`).
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Given {
     /// `mismatch`: a share of the measured magnitudes.
     pub along: Source,
@@ -169,7 +160,7 @@ impl fmt::Display for Given {
 /// The miss of one press: the share of the measured torque `measured`'s size that the
 /// map's `map` misses, and the angle between them (rad); `None` where either torque is too
 /// small to have a direction.
-pub fn miss(measured: [f64; 3], map: [f64; 3]) -> Option<(f64, f64)> {
+fn miss(measured: [f64; 3], map: [f64; 3]) -> Option<(f64, f64)> {
     let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
     let (a, b) = (norm(measured), norm(map));
     if a < MIN_TORQUE || b < MIN_TORQUE {
