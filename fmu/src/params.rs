@@ -211,6 +211,7 @@ impl Params {
             clearance: checked(store, "clearance")?,
             mismatch: checked(store, "mismatch")?,
             mismatch_angle: checked(store, "mismatch_angle")?,
+            mismatch_position: checked(store, "mismatch_position")?,
             lost: checked(store, "lost")?,
         };
         let map = store.string(index_of("map")).to_owned();

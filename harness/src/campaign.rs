@@ -128,6 +128,9 @@ pub struct CampaignOptions {
     pub mismatch: Option<f64>,
     /// FMU parameter `mismatch_angle` (rad).
     pub mismatch_angle: Option<f64>,
+    /// FMU parameter `mismatch_position` (m).
+    #[serde(default)]
+    pub mismatch_position: Option<f64>,
     /// Measure the scene's misses against the map before the trials and hand them to the
     /// FMU as `mismatch` and `mismatch_angle` where those are not given ([`mismatch`]).
     #[serde(default)]
@@ -929,6 +932,7 @@ fn trial_config(
             sigma_depth: options.sigma_depth,
             mismatch: options.mismatch,
             mismatch_angle: options.mismatch_angle,
+            mismatch_position: options.mismatch_position,
             lost: options.lost,
             sigma_vision: options.sigma_vision,
             vision_method: Some(options.vision_method.parameter()),

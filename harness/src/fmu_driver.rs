@@ -46,6 +46,8 @@ pub struct Settings {
     pub mismatch: Option<f64>,
     /// `mismatch_angle` (rad).
     pub mismatch_angle: Option<f64>,
+    /// `mismatch_position` (m).
+    pub mismatch_position: Option<f64>,
     /// `lost` (prior probability per measurement that the particles lost the truth).
     pub lost: Option<f64>,
     /// `vision`: an absolute path of a vision model file.
@@ -114,6 +116,7 @@ struct Refs {
     sigma_torque: u32,
     mismatch: u32,
     mismatch_angle: u32,
+    mismatch_position: u32,
     lost: u32,
     sigma_force: u32,
     sigma_depth: u32,
@@ -212,6 +215,7 @@ impl Fmu {
             sigma_torque: vr("sigma_torque")?,
             mismatch: vr("mismatch")?,
             mismatch_angle: vr("mismatch_angle")?,
+            mismatch_position: vr("mismatch_position")?,
             lost: vr("lost")?,
             sigma_force: vr("sigma_force")?,
             sigma_depth: vr("sigma_depth")?,
@@ -283,6 +287,11 @@ impl Fmu {
             (r.sigma_depth, settings.sigma_depth, "sigma_depth"),
             (r.mismatch, settings.mismatch, "mismatch"),
             (r.mismatch_angle, settings.mismatch_angle, "mismatch_angle"),
+            (
+                r.mismatch_position,
+                settings.mismatch_position,
+                "mismatch_position",
+            ),
             (r.lost, settings.lost, "lost"),
             (r.sigma_vision, settings.sigma_vision, "sigma_vision"),
         ];

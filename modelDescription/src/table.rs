@@ -381,7 +381,7 @@ pub const VARIABLES: &[Variable] = &[
         "mismatch",
         113,
         Real,
-        Start::Real(0.03),
+        Start::Real(0.02),
         "",
         [Some(0.0), Some(1.0)],
         "Share of the measured force's and torque's magnitudes that the map may miss (contact \
@@ -392,7 +392,7 @@ pub const VARIABLES: &[Variable] = &[
         "mismatch_angle",
         114,
         Real,
-        Start::Real(0.03),
+        Start::Real(0.02),
         "rad",
         [Some(0.0), Some(1.0)],
         "Angle by which the map may miss the direction of the measured force and torque: across \
@@ -431,6 +431,19 @@ pub const VARIABLES: &[Variable] = &[
         [None, None],
         "Centre map of `map` (a finer map of the cells around the goal, `ftmap generate \
          --centre`): a name in the FMU's resources folder or an absolute path; empty: none",
+    ),
+    param(
+        "mismatch_position",
+        118,
+        Real,
+        Start::Real(5e-6),
+        "m",
+        [Some(0.0), Some(0.001)],
+        "How far the contact may sit from where the map has it (standard deviation in each \
+         axis across the approach; on an object rotation, over the lever at which the fit's \
+         play takes up its clearance): the variance of the force's and torque's x and y \
+         components grows by its square times their squared slope at the particle (steep near \
+         the hole, flat far from it), with the likelihood's normalisation; 0: none",
     ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(

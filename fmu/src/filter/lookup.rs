@@ -22,6 +22,9 @@ use crate::error::{FusionError, Result};
 
 /// Channels per padded cell: fx fy fz tx ty tz depth, contact (1) or inserted (0).
 pub const LANES: usize = 8;
+/// Squared slopes per cell: the force's and the torque's (each the mean over its x and y
+/// components, across the tool's axis).
+const SLOPES: usize = 2;
 /// The lane that flags a contact cell.
 const CONTACT: usize = LANES - 1;
 
@@ -110,6 +113,15 @@ pub struct Lookup {
 struct Level {
     axes: Vec<MapAxis>,
     cells: Vec<[f32; LANES]>,
+    /// Per cell, the squared slopes of its force and torque ([`slopes`]).
+    slopes: Vec<[f32; SLOPES]>,
+}
+
+/// The channels at a point of the map and the squared slopes of its force and torque there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Sample {
+    lanes: [f32; LANES],
+    slopes: [f32; SLOPES],
 }
 
 /// The centre map's cells and where its grid lies on the map's.
@@ -130,11 +142,15 @@ struct Params<const D: usize> {
     up: [usize; D],
 }
 
-/// How a predicted cell is weighed against a measurement (Eq. 3, -1/2 chi^2): each
+/// How a predicted cell is weighed against a measurement (Eq. 3 in log space): each
 /// channel's residual squared times its inverse variance, plus, for the force and torque
 /// vectors, `along` times the square of the residual's component along `axis` (the measured
 /// vector's direction), so that the map may miss a vector's magnitude by more (or less)
-/// than its direction.
+/// than its direction. Where the map may miss the contact's position (`position`), the x
+/// and y components of the force and the torque (across the tool's axis, where a contact
+/// displaced across it moves them) get that much more variance per unit of their squared
+/// slope at the particle, and the likelihood its normalisation (a particle on a steep slope
+/// explains a wide range of measurements, each less well).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Weights {
     /// Measured channels, padded.
@@ -145,6 +161,12 @@ pub struct Weights {
     pub axis: [[f32; 3]; 2],
     /// Extra inverse variance along each `axis`.
     pub along: [f32; 2],
+    /// Variance added to the force's and torque's x and y components per unit of their
+    /// squared slope (m^2: the square of the position the map may miss, in each axis across
+    /// the approach).
+    pub position: f32,
+    /// Degrees of freedom of a Student-t likelihood over the channels used; 0: Gaussian.
+    pub tail: f32,
 }
 
 impl Weights {
@@ -157,21 +179,57 @@ impl Weights {
         }
     }
 
-    /// -1/2 chi^2 of the predicted channels `pred` (the contact lane's inverse variance is 0).
+    /// Log-likelihood of the predicted channels `pred`, whose force and torque have the
+    /// squared slopes `slopes` (constants of the measurement dropped: 0 for a perfect
+    /// prediction without slope). The contact lane's inverse variance is 0.
     #[inline(always)]
-    fn log_likelihood(&self, pred: &[f32; LANES]) -> f32 {
+    fn log_likelihood(&self, pred: &[f32; LANES], slopes: &[f32; SLOPES]) -> f32 {
         let mut d = [0.0f32; LANES];
-        let mut s = 0.0;
+        let mut chi2 = 0.0;
         for l in 0..LANES {
             d[l] = self.meas[l] - pred[l];
-            s += self.inv_var[l] * d[l] * d[l];
+            chi2 += self.inv_var[l] * d[l] * d[l];
         }
+        // How much larger the determinant of the covariance is than without the slopes.
+        let mut ratio = 1.0f32;
         for g in 0..2 {
             let a = &self.axis[g];
-            let p = d[3 * g] * a[0] + d[3 * g + 1] * a[1] + d[3 * g + 2] * a[2];
-            s += self.along[g] * p * p;
+            let r = &d[3 * g..3 * g + 3];
+            let p = r[0] * a[0] + r[1] * a[1] + r[2] * a[2];
+            chi2 += self.along[g] * p * p;
+            let across = self.inv_var[3 * g];
+            let extra = self.position * slopes[g];
+            if extra > 0.0 && across > 0.0 {
+                // Covariance D + c a a^T, D diagonal: the variance across plus `extra` on x
+                // and y, c the variance along less that across; its inverse by
+                // Sherman-Morrison.
+                let va = 1.0 / across;
+                let c = 1.0 / (across + self.along[g]) - va;
+                let inv = 1.0 / (va + extra);
+                let q = inv * (r[0] * r[0] + r[1] * r[1]) + across * r[2] * r[2];
+                let ad = inv * (a[0] * r[0] + a[1] * r[1]) + across * a[2] * r[2];
+                let aa = inv * (a[0] * a[0] + a[1] * a[1]) + across * a[2] * a[2];
+                let den = 1.0 + c * aa;
+                let base = 1.0 + c * across * (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+                let squared = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+                chi2 += q - c * ad * ad / den - across * squared - self.along[g] * p * p;
+                let grown = 1.0 + extra * across;
+                ratio *= grown * grown * den / base;
+            }
         }
-        -0.5 * s
+        let ll = if self.tail > 0.0 {
+            // Multivariate Student-t in the Gaussian's chi^2 over the d channels used:
+            // log (1 + chi^2 / nu) ^ (-(nu + d) / 2).
+            let d = self.inv_var.iter().filter(|v| **v > 0.0).count() as f32;
+            -0.5 * (self.tail + d) * (chi2 / self.tail).ln_1p()
+        } else {
+            -0.5 * chi2
+        };
+        if ratio > 1.0 {
+            ll - 0.5 * ratio.ln()
+        } else {
+            ll
+        }
     }
 }
 
@@ -208,6 +266,7 @@ impl Lookup {
         }
         let depth_range = map.depth_range();
         let (cells, largest) = padded(map, depth_range, path)?;
+        let levers = levers(map);
         let play = axes
             .iter()
             .enumerate()
@@ -215,7 +274,7 @@ impl Lookup {
             .collect();
         Ok(Self {
             task: map.meta().task.clone(),
-            level: Level { axes, cells },
+            level: Level::new(axes, cells, &levers),
             centre: None,
             depth_range,
             approach: map.meta().approach,
@@ -255,7 +314,7 @@ impl Lookup {
             *l = l.max(c);
         }
         lookup.centre = Some(Centre {
-            level: Level { axes, cells },
+            level: Level::new(axes, cells, &levers(map)),
             scale,
             offset,
         });
@@ -375,6 +434,11 @@ impl Lookup {
     /// The padded channels at grid coordinates `u` (one per axis), multilinear, clamped;
     /// from the centre map within its region.
     pub fn at(&self, u: &[f32]) -> [f32; LANES] {
+        self.sample(u).lanes
+    }
+
+    /// [`Lookup::at`] with the squared slopes of the force and torque components there.
+    fn sample(&self, u: &[f32]) -> Sample {
         let n = u.len().min(self.ndim());
         let mut t = [0.0f32; MAX_AXES];
         for (k, a) in self.level.axes.iter().enumerate().take(n) {
@@ -394,8 +458,8 @@ impl Lookup {
         self.level.at(&t[..n])
     }
 
-    /// Writes -1/2 of the weighted squared residual (Eq. 3 in log space, constants
-    /// dropped) of every particle into `out`. `rel` holds the particles' map coordinates
+    /// Writes every particle's log-likelihood ([`Weights`]: Eq. 3 in log space, constants
+    /// dropped) into `out`. `rel` holds the particles' map coordinates
     /// axis-major (`rel[k * n + i]`, [`Lookup::relative`]), `w` the measurement and its
     /// weights.
     pub fn log_likelihood(&self, interp: Interpolation, rel: &[f32], w: &Weights, out: &mut [f32]) {
@@ -456,7 +520,7 @@ impl Lookup {
             let t = Self::clamped(rel, n, i, &params.0.top);
             let (level, p, u) = self.level_at(t, &params);
             let idx: usize = (0..D).map(|k| (u[k] + 0.5) as usize * p.stride[k]).sum();
-            *o = w.log_likelihood(&level.cells[idx]);
+            *o = w.log_likelihood(&level.cells[idx], &level.slopes[idx]);
         }
     }
 
@@ -466,7 +530,8 @@ impl Lookup {
         for (i, o) in out.iter_mut().enumerate() {
             let t = Self::clamped(rel, n, i, &params.0.top);
             let (level, p, u) = self.level_at(t, &params);
-            *o = w.log_likelihood(&level.linear(p, u));
+            let at = level.linear(p, u);
+            *o = w.log_likelihood(&at.lanes, &at.slopes);
         }
     }
 
@@ -481,12 +546,23 @@ impl Lookup {
                     Interpolation::Multilinear => t,
                 };
             }
-            *o = w.log_likelihood(&self.at(&u));
+            let at = self.sample(&u);
+            *o = w.log_likelihood(&at.lanes, &at.slopes);
         }
     }
 }
 
 impl Level {
+    /// A level of `cells` on `axes`, with their slopes ([`slopes`]: `levers` per axis).
+    fn new(axes: Vec<MapAxis>, cells: Vec<[f32; LANES]>, levers: &[f64]) -> Self {
+        let slopes = slopes(&axes, &cells, levers);
+        Self {
+            axes,
+            cells,
+            slopes,
+        }
+    }
+
     /// The lookup parameters of its first `D` axes.
     fn params<const D: usize>(&self) -> Params<D> {
         let mut p = Params {
@@ -506,7 +582,7 @@ impl Level {
 
     /// Multilinear channels at coordinates `t` within the grid (`p`: its parameters).
     #[inline(always)]
-    fn linear<const D: usize>(&self, p: &Params<D>, t: [f32; D]) -> [f32; LANES] {
+    fn linear<const D: usize>(&self, p: &Params<D>, t: [f32; D]) -> Sample {
         let mut base = 0;
         let mut frac = [0.0f32; D];
         for k in 0..D {
@@ -529,19 +605,24 @@ impl Level {
             len *= 2;
         }
         let mut acc = [0.0f32; LANES];
+        let mut slopes = [0.0f32; SLOPES];
         for (wt, &c) in wts.iter().zip(&idx).take(1 << D) {
             let cell = &self.cells[c];
             for l in 0..LANES {
                 acc[l] += wt * cell[l];
             }
+            for (s, v) in slopes.iter_mut().zip(&self.slopes[c]) {
+                *s += wt * v;
+            }
         }
-        over_contacts(&mut acc);
-        acc
+        over_contacts(&mut acc, &mut slopes);
+        Sample { lanes: acc, slopes }
     }
 
     /// Multilinear channels at coordinates `t` within the grid, any number of axes.
-    fn at(&self, t: &[f32]) -> [f32; LANES] {
+    fn at(&self, t: &[f32]) -> Sample {
         let mut out = [0.0; LANES];
+        let mut slopes = [0.0f32; SLOPES];
         let n = t.len().min(self.axes.len());
         let mut base = 0;
         let mut frac = [0.0f32; MAX_AXES];
@@ -565,10 +646,13 @@ impl Level {
                 for (o, v) in out.iter_mut().zip(&self.cells[idx]) {
                     *o += w * v;
                 }
+                for (s, v) in slopes.iter_mut().zip(&self.slopes[idx]) {
+                    *s += w * v;
+                }
             }
         }
-        over_contacts(&mut out);
-        out
+        over_contacts(&mut out, &mut slopes);
+        Sample { lanes: out, slopes }
     }
 }
 
@@ -638,15 +722,197 @@ fn inserted(depth_range: Option<[f32; 2]>, height: f64) -> bool {
     depth_range.is_some_and(|[lo, hi]| height < 0.5 * f64::from(lo + hi))
 }
 
-/// Renormalises an interpolated wrench over the contact corners (their weight is the
-/// contact lane); with none, the masked zeros stay.
+/// Renormalises an interpolated wrench and its slopes over the contact corners (their
+/// weight is the contact lane); with none, the masked zeros stay.
 #[inline(always)]
-fn over_contacts(acc: &mut [f32; LANES]) {
+fn over_contacts(acc: &mut [f32; LANES], slopes: &mut [f32; SLOPES]) {
     let w = acc[CONTACT];
     if w > 0.0 && w < 1.0 {
         let s = 1.0 / w;
-        for v in &mut acc[..NCH - 1] {
+        for v in acc[..NCH - 1].iter_mut().chain(slopes.iter_mut()) {
             *v *= s;
         }
+    }
+}
+
+/// Per axis of `map`, how far (m) the contact moves per unit of the axis: 1 on the object's
+/// x and y; on an object rotation with play, the fit's clearance over that play (the lever
+/// at which the play takes up the clearance); 0 on the other axes (a contact's position
+/// does not move them).
+fn levers(map: &FtMap) -> Vec<f64> {
+    let clearance = map.meta().clearance.unwrap_or(0.0);
+    map.grid()
+        .axes()
+        .iter()
+        .enumerate()
+        .map(|(k, a)| match (a.dof.pose, a.dof.axis) {
+            (Pose::Object, Axis::X | Axis::Y) => 1.0,
+            (Pose::Object, _) if a.dof.is_rotation() => {
+                let play = map.rotational_play(k);
+                if play > 0.0 { clearance / play } else { 0.0 }
+            }
+            _ => 0.0,
+        })
+        .collect()
+}
+
+/// Per cell, the squared slopes of its force and torque per metre the contact moves: for
+/// each, the mean over its x and y components of the sum over the axes with a lever
+/// ([`levers`]) of the squared derivative, SI units; central differences between contact
+/// cells (round a periodic axis), one-sided beside an inserted cell or the grid's edge; 0
+/// on an inserted cell. How much a wrench changes when the contact sits elsewhere than the
+/// map has it.
+fn slopes(axes: &[MapAxis], cells: &[[f32; LANES]], levers: &[f64]) -> Vec<[f32; SLOPES]> {
+    let moved: Vec<(&MapAxis, f64)> = axes
+        .iter()
+        .zip(levers.iter().copied())
+        .filter(|(a, lever)| *lever > 0.0 && a.count > 1)
+        .collect();
+    let contact = |i: usize| cells[i][CONTACT] > 0.0;
+    (0..cells.len())
+        .map(|i| {
+            let mut out = [0.0f32; SLOPES];
+            if !contact(i) {
+                return out;
+            }
+            for &(a, lever) in &moved {
+                let at = i / a.stride % a.count;
+                let base = i - at * a.stride;
+                // A periodic axis's last sample is its first: its neighbours wrap past it.
+                let last = a.count - 1;
+                let neighbour =
+                    |j: Option<usize>| j.map(|j| base + j * a.stride).filter(|&n| contact(n));
+                let (lo, hi) = if a.period.is_some() {
+                    (
+                        neighbour(Some(if at == 0 { last - 1 } else { at - 1 })),
+                        neighbour(Some(if at == last { 1 } else { at + 1 })),
+                    )
+                } else {
+                    (
+                        neighbour(at.checked_sub(1)),
+                        neighbour((at < last).then_some(at + 1)),
+                    )
+                };
+                let (from, to, steps) = match (lo, hi) {
+                    (Some(l), Some(h)) => (l, h, 2.0),
+                    (Some(l), None) => (l, i, 1.0),
+                    (None, Some(h)) => (i, h, 1.0),
+                    (None, None) => continue,
+                };
+                let h = (steps * a.step * lever) as f32;
+                for (g, o) in out.iter_mut().enumerate() {
+                    *o += [3 * g, 3 * g + 1]
+                        .iter()
+                        .map(|&l| 0.5 * ((cells[to][l] - cells[from][l]) / h).powi(2))
+                        .sum::<f32>();
+                }
+            }
+            out
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use ftfusion_testkit::{FORCE, field, peg_map};
+    use nalgebra::{Matrix3, Vector3};
+
+    use super::*;
+
+    /// The slopes' log-likelihood in f64 with each group's covariance written out: across
+    /// `va`, along the measured vector `vb`, plus `position` times the slope on x and y;
+    /// less the log determinant of the covariance without slopes.
+    fn written_out(w: &Weights, pred: &[f32; LANES], slopes: &[f32; SLOPES]) -> f64 {
+        let mut ll = 0.0;
+        for g in 0..2 {
+            let a = Vector3::from_iterator(w.axis[g].iter().map(|v| f64::from(*v)));
+            let va = 1.0 / f64::from(w.inv_var[3 * g]);
+            let vb = 1.0 / (f64::from(w.inv_var[3 * g]) + f64::from(w.along[g]));
+            let base = Matrix3::identity() * va + a * a.transpose() * (vb - va);
+            let e = f64::from(w.position) * f64::from(slopes[g]);
+            let slope = Matrix3::from_diagonal(&Vector3::new(e, e, 0.0));
+            let cov = base + slope;
+            let r = Vector3::from_iterator(
+                (0..3).map(|k| f64::from(w.meas[3 * g + k]) - f64::from(pred[3 * g + k])),
+            );
+            let chi2 = (r.transpose() * cov.try_inverse().expect("invertible") * r)[0];
+            ll += -0.5 * chi2 - 0.5 * (cov.determinant() / base.determinant()).ln();
+        }
+        ll
+    }
+
+    #[test]
+    fn slopes_widen_the_likelihood_as_the_covariance_written_out_does() {
+        let meas = [0.3, -0.2, 20.0, 0.12, 0.05, 0.001, 0.0, 0.0];
+        let pred = [0.25, -0.1, 19.0, 0.10, 0.07, 0.0, 0.0, 1.0];
+        let unit = |v: &[f32]| {
+            let n = v.iter().map(|x| x * x).sum::<f32>().sqrt();
+            [v[0] / n, v[1] / n, v[2] / n]
+        };
+        // Along the measured force it may miss more than across, along the torque less.
+        let (va, vb) = ([1e-2f32, 1e-5], [3e-2f32, 0.5e-5]);
+        let mut inv_var = [0.0f32; LANES];
+        inv_var[..3].fill(1.0 / va[0]);
+        inv_var[3..6].fill(1.0 / va[1]);
+        let w = Weights {
+            meas,
+            inv_var,
+            axis: [unit(&meas[..3]), unit(&meas[3..6])],
+            along: [1.0 / vb[0] - 1.0 / va[0], 1.0 / vb[1] - 1.0 / va[1]],
+            position: 2.5e-11,
+            tail: 0.0,
+        };
+        for slopes in [[1e9, 4e6], [0.0, 6e6], [4e8, 0.0], [0.0; SLOPES]] {
+            let got = f64::from(w.log_likelihood(&pred, &slopes));
+            let want = written_out(&w, &pred, &slopes);
+            assert!(
+                (got - want).abs() < 1e-4 * (1.0 + want.abs()),
+                "slopes {slopes:?}: {got} against {want}"
+            );
+        }
+        // Steeper, the same residual costs less, and a perfect prediction more.
+        let steep = [0.0, 6e6];
+        assert!(w.log_likelihood(&pred, &steep) > w.log_likelihood(&pred, &[0.0; SLOPES]));
+        assert!(w.log_likelihood(&meas, &steep) < w.log_likelihood(&meas, &[0.0; SLOPES]));
+    }
+
+    #[test]
+    fn the_slopes_are_the_fields_derivatives() {
+        let step = 2.5e-4;
+        let map = peg_map(5e-3, step, None).expect("map");
+        let lookup = Lookup::new(&map, Path::new("synthetic")).expect("lookup");
+        let level = &lookup.level;
+        for (x, y) in [(2e-3, 1e-3), (-3e-3, 0.5e-3), (0.75e-3, -4e-3)] {
+            let i = level.axes[0].coord(x).round() as usize * level.axes[0].stride
+                + level.axes[1].coord(y).round() as usize * level.axes[1].stride;
+            // tx = F L(r) y / r, ty = -F L(r) x / r, with L(r) = 3.9 mm - 0.45 r.
+            let r = f64::hypot(x, y);
+            let (l, dl) = (0.0039 - 0.45 * r, -0.45);
+            let dtx = [
+                FORCE * x * y / (r * r) * (dl - l / r),
+                FORCE * (dl * y * y / (r * r) + l * x * x / (r * r * r)),
+            ];
+            let dty = [
+                -FORCE * (dl * x * x / (r * r) + l * y * y / (r * r * r)),
+                -FORCE * x * y / (r * r) * (dl - l / r),
+            ];
+            let want = 0.5 * (dtx[0].powi(2) + dtx[1].powi(2) + dty[0].powi(2) + dty[1].powi(2));
+            let got = f64::from(level.slopes[i][1]);
+            assert!(
+                (got - want).abs() < 0.05 * want,
+                "({x}, {y}): {got} against {want}"
+            );
+            // The force does not change with x, y in this field; the hole's cells none.
+            assert!(level.slopes[i][0] < 1e-6);
+        }
+        let centre = level.axes[0].coord(0.0).round() as usize * level.axes[0].stride
+            + level.axes[1].coord(0.0).round() as usize * level.axes[1].stride;
+        assert_eq!(level.slopes[centre], [0.0; SLOPES]);
+        assert!(
+            field(0.0, 0.0, 0.0, 0.0)[6] == 0.0,
+            "the field's centre is inserted"
+        );
     }
 }

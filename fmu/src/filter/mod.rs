@@ -88,6 +88,11 @@ pub struct Config {
     /// Angle by which the map may miss the measured force's and torque's directions (rad):
     /// across the measured vector, that angle times its magnitude is added in quadrature.
     pub mismatch_angle: f64,
+    /// How far the contact may sit from where the map has it (m, standard deviation in each
+    /// axis across the approach): the variance of the force's and torque's x and y
+    /// components grows by its square times their squared slope at the particle (steep near
+    /// the hole, flat far from it), with the likelihood's normalisation; 0: none.
+    pub mismatch_position: f64,
     /// Prior probability that the particle set has lost the truth (e.g. locked on a wrong
     /// hypothesis by a contact the map did not explain): where the measurements since the
     /// set last explained one better than the prior make that more likely than not, half the
@@ -110,8 +115,9 @@ impl Default for Config {
             interpolation: Interpolation::Multilinear,
             tail: 4.0,
             clearance: 0.0,
-            mismatch: 0.03,
-            mismatch_angle: 0.03,
+            mismatch: 0.02,
+            mismatch_angle: 0.02,
+            mismatch_position: 5e-6,
             lost: 1e-9,
         }
     }
@@ -378,6 +384,8 @@ impl Filter {
             ],
             axis: [f.axis, t.axis],
             along: [f.along, t.along],
+            position: (c.mismatch_position * c.mismatch_position) as f32,
+            tail: c.tail as f32,
         };
         let evidence = Evidence {
             negative: negative.map(|n| {
@@ -417,15 +425,6 @@ impl Filter {
             self.lookup.relative(&self.pos, &ev.tcp, rel);
             self.lookup
                 .log_likelihood(self.cfg.interpolation, rel, &ev.weights, ll);
-            if self.cfg.tail > 0.0 {
-                // Multivariate Student-t in the Gaussian's chi^2 = -2 ll over the d channels
-                // used: log (1 + chi^2 / nu) ^ (-(nu + d) / 2).
-                let nu = self.cfg.tail as f32;
-                let d = ev.weights.inv_var.iter().filter(|v| **v > 0.0).count() as f32;
-                for l in ll.iter_mut() {
-                    *l = -0.5 * (nu + d) * (-2.0 * *l / nu).ln_1p();
-                }
-            }
             if let Some((negative, from, to)) = &ev.negative {
                 negative.add_log_likelihood(&self.pos, rel, *from, *to, ll);
             }

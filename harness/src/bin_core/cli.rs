@@ -280,6 +280,10 @@ pub struct RunArgs {
     /// FMU parameter `mismatch_angle` (rad: how far the map may miss their directions).
     #[arg(long)]
     pub mismatch_angle: Option<f64>,
+    /// FMU parameter `mismatch_position` (m: how far the contact may sit from where the
+    /// map has it).
+    #[arg(long)]
+    pub mismatch_position: Option<f64>,
     /// Measure the scene's misses against the map before the trials (96 presses, cached) and
     /// hand them to the FMU as `mismatch` and `mismatch_angle` where those are not given.
     #[arg(long)]
@@ -408,6 +412,7 @@ impl RunArgs {
             sigma_depth: self.sigma_depth,
             mismatch: self.mismatch,
             mismatch_angle: self.mismatch_angle,
+            mismatch_position: self.mismatch_position,
             measure_mismatch: self.measure_mismatch,
             lost: self.lost,
             world: match self.world {
