@@ -167,6 +167,8 @@ pub struct Weights {
     pub position: f32,
     /// Degrees of freedom of a Student-t likelihood over the channels used; 0: Gaussian.
     pub tail: f32,
+    /// The channels used (inverse variance above 0), counted once by [`Weights::student`].
+    pub(crate) channels: f32,
 }
 
 impl Weights {
@@ -176,6 +178,16 @@ impl Weights {
             meas,
             inv_var,
             ..Self::default()
+        }
+    }
+
+    /// These weights with a Student-t likelihood of `tail` degrees of freedom (0: Gaussian)
+    /// over the channels `inv_var` uses.
+    pub fn student(self, tail: f32) -> Self {
+        Self {
+            tail,
+            channels: self.inv_var.iter().filter(|v| **v > 0.0).count() as f32,
+            ..self
         }
     }
 
@@ -220,8 +232,7 @@ impl Weights {
         let ll = if self.tail > 0.0 {
             // Multivariate Student-t in the Gaussian's chi^2 over the d channels used:
             // log (1 + chi^2 / nu) ^ (-(nu + d) / 2).
-            let d = self.inv_var.iter().filter(|v| **v > 0.0).count() as f32;
-            -0.5 * (self.tail + d) * (chi2 / self.tail).ln_1p()
+            -0.5 * (self.tail + self.channels) * (chi2 / self.tail).ln_1p()
         } else {
             -0.5 * chi2
         };
@@ -862,7 +873,7 @@ mod tests {
             axis: [unit(&meas[..3]), unit(&meas[3..6])],
             along: [1.0 / vb[0] - 1.0 / va[0], 1.0 / vb[1] - 1.0 / va[1]],
             position: 2.5e-11,
-            tail: 0.0,
+            ..Weights::default()
         };
         for slopes in [[1e9, 4e6], [0.0, 6e6], [4e8, 0.0], [0.0; SLOPES]] {
             let got = f64::from(w.log_likelihood(&pred, &slopes));

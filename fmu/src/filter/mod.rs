@@ -385,8 +385,9 @@ impl Filter {
             axis: [f.axis, t.axis],
             along: [f.along, t.along],
             position: (c.mismatch_position * c.mismatch_position) as f32,
-            tail: c.tail as f32,
-        };
+            ..Weights::default()
+        }
+        .student(c.tail as f32);
         let evidence = Evidence {
             negative: negative.map(|n| {
                 let tcp = [m.tcp[0], m.tcp[1], m.tcp[5]];
