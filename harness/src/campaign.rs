@@ -112,7 +112,8 @@ pub struct CampaignOptions {
     pub fmu: Option<PathBuf>,
     /// Most contact motions per trial (default: 30 for pf; enough to cover Omega for spiral).
     pub max_contacts: Option<usize>,
-    /// Most simulated time per trial (s; default: 0.3 s per allowed contact).
+    /// Most simulated time per trial (s; default: none, the trial ends after `max_contacts`
+    /// motions, each of them bounded by [`crate::sim::MAX_TIME`]).
     pub max_sim_time: Option<f64>,
     /// FMU parameter `particles`.
     pub particles: Option<i32>,
@@ -907,7 +908,7 @@ fn trial_config(
     Ok(TrialConfig {
         strategy: options.strategy,
         max_contacts,
-        max_sim_time: options.max_sim_time.unwrap_or(0.3 * max_contacts as f64),
+        max_sim_time: options.max_sim_time.unwrap_or(f64::INFINITY),
         slide: options.slide.then(|| fit.clearance()),
         symmetry: task.omega.symmetry,
         twist: if options.twist {

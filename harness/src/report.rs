@@ -44,6 +44,9 @@ pub struct Summary {
     pub contacts: ContactStats,
     /// Contact measurements per trial: contact motions that did not insert the part.
     pub measurements: ContactStats,
+    /// Simulated time per trial (s): the contact motions' own, without the free-space moves
+    /// between them.
+    pub sim_time: ContactStats,
     /// Mean `object.y_std` after the first contact measurement (m).
     pub y_std_first_contact: f64,
     /// Whether the reported spreads are calibrated, over every contact measurement; `None`
@@ -307,6 +310,7 @@ pub fn summarize(
         success_rate: results.iter().filter(|r| r.success).count() as f64 / n,
         contacts: ContactStats::of(results.iter().map(|r| r.contacts as f64).collect()),
         measurements: ContactStats::of(results.iter().map(|r| r.measurements() as f64).collect()),
+        sim_time: ContactStats::of(results.iter().map(|r| r.sim_time).collect()),
         y_std_first_contact: first.iter().sum::<f64>() / first.len().max(1) as f64,
         calibration: Some(&samples)
             .filter(|s| !s.is_empty())
@@ -402,6 +406,13 @@ impl Summary {
                     self.measurements.median,
                     self.measurements.p95,
                     self.measurements.max
+                ),
+            ),
+            (
+                "simulated time per trial mean / median / p95 / max",
+                format!(
+                    "{:.2} / {:.2} / {:.2} / {:.2} s",
+                    self.sim_time.mean, self.sim_time.median, self.sim_time.p95, self.sim_time.max
                 ),
             ),
             (

@@ -256,7 +256,7 @@ pub struct RunArgs {
     /// Most contact motions per trial (default: 30 for pf; enough to cover Omega for spiral).
     #[arg(long, value_parser = count)]
     pub max_contacts: Option<usize>,
-    /// Most simulated time per trial (s; default: 0.3 s per allowed contact).
+    /// Most simulated time per trial (s; default: none, only --max-contacts ends a trial).
     #[arg(long, value_parser = positive)]
     pub max_sim_time: Option<f64>,
     /// FMU parameter `particles`.
