@@ -78,6 +78,27 @@ impl MapAxis {
         }
     }
 
+    /// Grid coordinate `u` of a particle moved by its jitter, brought back into Omega:
+    /// wrapped on a periodic axis, mirrored at the bounds on another (a clamp would pile
+    /// the particles that cross a bound onto it, a point mass that the uniform prior does
+    /// not hold and that reads as a narrow spread at the bound).
+    #[inline(always)]
+    pub fn reflect(&self, u: f32) -> f32 {
+        if self.period.is_some() {
+            return self.fold(u);
+        }
+        let top = self.top();
+        let mirrored = if u < 0.0 {
+            -u
+        } else if u > top {
+            2.0 * top - u
+        } else {
+            u
+        };
+        // A step longer than the axis itself crosses both bounds: the clamp ends it.
+        mirrored.clamp(0.0, top)
+    }
+
     /// The difference `d` of two grid coordinates, the shortest way round on a periodic axis.
     #[inline(always)]
     pub fn difference(&self, d: f32) -> f32 {
@@ -925,5 +946,41 @@ mod tests {
             field(0.0, 0.0, 0.0, 0.0)[6] == 0.0,
             "the field's centre is inserted"
         );
+    }
+
+    #[test]
+    fn jitter_mirrored_at_the_bounds_keeps_a_uniform_set_uniform() {
+        use rand_xoshiro::Xoshiro256PlusPlus;
+        use rand_xoshiro::rand_core::SeedableRng;
+        let axis = MapAxis {
+            dof: Dof::new(Pose::Grip, Axis::X),
+            min: -0.002,
+            step: 1e-4,
+            count: 41,
+            stride: 1,
+            tcp: None,
+            period: None,
+        };
+        let (n, top) = (40_000, axis.top());
+        let mut v: Vec<f32> = (0..n).map(|i| top * (i as f32 + 0.5) / n as f32).collect();
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
+        for _ in 0..200 {
+            crate::filter::noise::jitter(&mut rng, &mut v, 0.1 * top, |u| axis.reflect(u));
+        }
+        // A flat likelihood: the walk's stationary set is the uniform prior, with no mass
+        // piled on a bound (a clamp puts a few per cent on each).
+        let at_bounds = v.iter().filter(|&&u| u == 0.0 || u == top).count();
+        assert!(at_bounds < 10, "{at_bounds} particles on a bound");
+        let mut bins = [0usize; 10];
+        for &u in &v {
+            bins[((u / top * 10.0) as usize).min(9)] += 1;
+        }
+        for (b, &c) in bins.iter().enumerate() {
+            let share = c as f64 / n as f64;
+            assert!((share - 0.1).abs() < 0.01, "bin {b} holds {share}");
+        }
+        assert_eq!(axis.reflect(-1.5), 1.5);
+        assert_eq!(axis.reflect(top + 2.0), top - 2.0);
+        assert_eq!(axis.reflect(3.0 * top), 0.0, "past both bounds: clamped");
     }
 }

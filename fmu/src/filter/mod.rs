@@ -562,7 +562,8 @@ impl Filter {
         self.lw.fill(-(n as f32).ln());
     }
 
-    /// Gaussian jitter on every axis, clamped into Omega (wrapped on a periodic axis):
+    /// Gaussian jitter on every axis, mirrored back into Omega at its bounds (wrapped on a
+    /// periodic axis):
     /// `jitter` grid intervals, or less once the particles' spread is small, so that the
     /// jitter of a measurement's iterations together moves a particle by about
     /// [`JITTER_SPREAD`] of the spread: a fixed jitter would blur a posterior narrower than
@@ -590,7 +591,7 @@ impl Filter {
             };
             let values = &mut self.pos[k * n..(k + 1) * n];
             let scale = s.min(per_iteration * spreads[k].max(scale_of_fit));
-            noise::jitter(&mut self.rng, values, scale, |u| a.fold(u));
+            noise::jitter(&mut self.rng, values, scale, |u| a.reflect(u));
         }
     }
 }

@@ -22,7 +22,7 @@ fn table() -> &'static [f32; SIZE] {
 }
 
 /// Adds `scale` times a standard-normal draw to every value and brings it back into its
-/// axis with `fold` (a clamp, or a wrap on a periodic axis).
+/// axis with `fold` (a mirror at its bounds, or a wrap on a periodic axis).
 pub fn jitter(
     rng: &mut Xoshiro256PlusPlus,
     values: &mut [f32],
