@@ -217,19 +217,12 @@ impl Weights {
     /// prediction without slope). The contact lane's inverse variance is 0.
     #[inline(always)]
     fn log_likelihood(&self, pred: &[f32; LANES], slopes: &[f32; SLOPES]) -> f32 {
-        let mut d = [0.0f32; LANES];
         let mut chi2 = 0.0;
-        for l in 0..LANES {
-            d[l] = self.meas[l] - pred[l];
-            chi2 += self.inv_var[l] * d[l] * d[l];
-        }
         // How much larger the determinant of the covariance is than without the slopes.
         let mut ratio = 1.0f32;
         for g in 0..2 {
+            let r: [f32; 3] = std::array::from_fn(|k| self.meas[3 * g + k] - pred[3 * g + k]);
             let a = &self.axis[g];
-            let r = &d[3 * g..3 * g + 3];
-            let p = r[0] * a[0] + r[1] * a[1] + r[2] * a[2];
-            chi2 += self.along[g] * p * p;
             let across = self.inv_var[3 * g];
             let extra = self.position * slopes[g];
             if extra > 0.0 && across > 0.0 {
@@ -244,11 +237,25 @@ impl Weights {
                 let aa = inv * (a[0] * a[0] + a[1] * a[1]) + across * a[2] * a[2];
                 let den = 1.0 + c * aa;
                 let base = 1.0 + c * across * (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-                let squared = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-                chi2 += q - c * ad * ad / den - across * squared - self.along[g] * p * p;
+                chi2 += q - c * ad * ad / den;
                 let grown = 1.0 + extra * across;
                 ratio *= grown * grown * den / base;
+            } else {
+                let p = r[0] * a[0] + r[1] * a[1] + r[2] * a[2];
+                for (k, v) in r.iter().enumerate() {
+                    chi2 += self.inv_var[3 * g + k] * v * v;
+                }
+                chi2 += self.along[g] * p * p;
             }
+        }
+        // The depth and the contact lane (whose inverse variance is 0).
+        let rest = NCH - 1..LANES;
+        for ((m, p), v) in self.meas[rest.clone()]
+            .iter()
+            .zip(&pred[rest.clone()])
+            .zip(&self.inv_var[rest])
+        {
+            chi2 += v * (m - p) * (m - p);
         }
         let ll = if self.tail > 0.0 {
             // Multivariate Student-t in the Gaussian's chi^2 over the d channels used:
