@@ -312,24 +312,29 @@ fn a_set_locked_on_a_wrong_hypothesis_relocates_and_a_sound_one_does_not() {
     // The part moved after three contacts (or the three were misread): the set holds a
     // hypothesis 5 mm off with a spread of a grid step. Relocation redraws particles from
     // the prior at the first contact that the set explains far worse than the prior does.
+    // 24 streams (each case on eight). Measured: without relocation never within 6
+    // contacts; with it within 2-4 on all 24. Over 50 streams of each case, the first two
+    // unlock within 4 contacts on every one, the third on 45: it took 5-6 on 3 and more
+    // than 6 on 2, where the redrawn set settled on the saturated rim's ridge. Over 3
+    // streams the bound read 3 (a fourth stream needs 4).
     let cases = [
-        (1, [-3.0e-3, 2.0e-3], [2.5e-3, -1.5e-3]),
-        (2, [3.5e-3, 3.0e-3], [-1.0e-3, -2.5e-3]),
-        (3, [0.5e-3, -4.0e-3], [-2.0e-3, 3.5e-3]),
+        ([-3.0e-3, 2.0e-3], [2.5e-3, -1.5e-3]),
+        ([3.5e-3, 3.0e-3], [-1.0e-3, -2.5e-3]),
+        ([0.5e-3, -4.0e-3], [-2.0e-3, 3.5e-3]),
     ];
-    for (seed, wrong, truth) in cases {
+    let mut quick = 0;
+    for seed in 1..=24u64 {
+        let (wrong, truth) = cases[(seed as usize - 1) % cases.len()];
         let (with, redrawn) = unlock(seed, Config::default().lost, wrong, truth);
         let (without, none) = unlock(seed, 0.0, wrong, truth);
-        assert!(redrawn > 0 && none == 0, "{redrawn} {none}");
+        assert!(redrawn > 0 && none == 0, "seed {seed}: {redrawn} {none}");
         assert!(
-            with.is_some_and(|k| k <= 3),
-            "seed {seed}: {with:?} contacts with relocation, {without:?} without"
+            without.is_none(),
+            "seed {seed}: {without:?} contacts without relocation"
         );
-        assert!(
-            without.is_none_or(|k| k > with.unwrap_or(0)),
-            "seed {seed}: {with:?} contacts with relocation, {without:?} without"
-        );
+        quick += usize::from(with.is_some_and(|k| k <= 4));
     }
+    assert!(quick >= 21, "{quick} of 24 streams within 4 contacts");
     // Contacts the set explains redraw next to nothing: at most a share `lost` of the
     // particles per contact (4 of 4000), where the set is as broad as the prior's reading.
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
@@ -884,22 +889,30 @@ fn a_slide_that_did_not_go_in_rules_out_the_line_it_swept() {
 fn the_jitter_keeps_a_spread_narrower_than_a_grid_step() {
     // Contacts around a truth between the grid's cells: the spread shrinks below the 0.1 mm
     // step, as the fixed jitter (0.15 steps per iteration, 0.067 mm per measurement) would
-    // not let it.
+    // not let it. Twelve streams of particles and noise.
     let map = peg_map(5e-3, 1e-4, None).expect("map");
-    let mut f = Filter::new(&map, Path::new("synthetic"), Config::default()).expect("filter");
     let truth = [1.234e-3, -0.567e-3];
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(9);
-    let mut tcp = [0.0, 0.0];
-    for _ in 0..8 {
-        f.measure(&measurement(truth[0], truth[1], tcp, 2e-3, &mut rng))
-            .expect("finite");
-        tcp = [f.estimate().pose[0], f.estimate().pose[1]];
+    for seed in 1..=12 {
+        let cfg = Config {
+            seed,
+            ..Config::default()
+        };
+        let mut f = Filter::new(&map, Path::new("synthetic"), cfg).expect("filter");
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(8 + seed);
+        let mut tcp = [0.0, 0.0];
+        for _ in 0..8 {
+            f.measure(&measurement(truth[0], truth[1], tcp, 2e-3, &mut rng))
+                .expect("finite");
+            tcp = [f.estimate().pose[0], f.estimate().pose[1]];
+        }
+        // Measured: spread 0.010 mm on every stream, error 0.007-0.046 mm: within half a
+        // step, but up to 4.6 times the spread (the interpolated map misses the field's
+        // step at the clearance: issue 10's overconfidence, not this test's subject). Over
+        // one stream (0.024 mm) the bound on the error read 0.03 mm.
+        let e = f.estimate();
+        assert!(e.std[0].max(e.std[1]) < 4e-5, "seed {seed}: {e:?}");
+        assert!(error(&f, truth) < 6e-5, "seed {seed}: {e:?}");
     }
-    // Measured: spread 0.026 / 0.026 mm (the jitter's floor, half the 0.05 mm clearance per
-    // measurement, keeps it there), error 0.021 mm; with the fixed jitter 0.094 / 0.048 mm.
-    let e = f.estimate();
-    assert!(e.std[0].max(e.std[1]) < 4e-5, "{e:?}");
-    assert!(error(&f, truth) < 3e-5, "{e:?}");
 }
 
 /// The analytic map with a 0.5 mm chamfer pair around the hole: beyond the clearance part A
