@@ -435,7 +435,7 @@ impl Instance {
                     .unwrap_or_default(),
                 filter.lookup().cells(),
                 dofs.join(", "),
-                params.config.particles
+                filter.config().particles
             ),
         );
         Ok((filter, trace))

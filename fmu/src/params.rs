@@ -5,7 +5,7 @@ use model_description::{Start, VARIABLES, VarType, Variable};
 
 use crate::error::{FusionError, Result};
 use crate::filter::VisionMethod;
-use crate::filter::{Config, Interpolation};
+use crate::filter::{Config, Interpolation, MAX_PARTICLES};
 
 /// The value of one variable.
 #[derive(Debug, Clone, PartialEq)]
@@ -153,6 +153,9 @@ pub struct Params {
     pub trace: Option<std::path::PathBuf>,
 }
 
+/// The fewest particles a user may ask for (fewer, but 0, is refused).
+const MIN_PARTICLES: usize = 10;
+
 /// `[min, max]` of a table variable as text.
 fn range(v: &Variable) -> String {
     let fmt = |b: Option<f64>, inf: &str| b.map_or(inf.to_owned(), |x| format!("{x}"));
@@ -184,7 +187,16 @@ impl Params {
     pub fn from_store(store: &Store) -> Result<Self> {
         let seed = checked(store, "seed")? as i32;
         let config = Config {
-            particles: checked(store, "particles")? as usize,
+            particles: match checked(store, "particles")? as usize {
+                n @ 1..MIN_PARTICLES => {
+                    return Err(FusionError::Parameter {
+                        name: "particles",
+                        value: format!("{n}"),
+                        range: format!("0 (automatic) or [{MIN_PARTICLES}, {MAX_PARTICLES}]"),
+                    });
+                }
+                n => n,
+            },
             seed: u64::from(seed as u32),
             iterations: checked(store, "iterations")? as usize,
             sigma_force: checked(store, "sigma_force")?,
@@ -270,7 +282,15 @@ mod tests {
         *s.get_mut(index_of("particles")) = Value::Integer(5);
         let e = Params::from_store(&s).expect_err("5 particles").to_string();
         assert!(
-            e.contains("`particles`") && e.contains("[10, 1000000]"),
+            e.contains("`particles`") && e.contains("0 (automatic) or [10, 1000000]"),
+            "{e}"
+        );
+        *s.get_mut(index_of("particles")) = Value::Integer(2_000_000);
+        let e = Params::from_store(&s)
+            .expect_err("2 M particles")
+            .to_string();
+        assert!(
+            e.contains("`particles`") && e.contains("[0, 1000000]"),
             "{e}"
         );
         let mut s = Store::default();

@@ -926,7 +926,7 @@ fn trial_config(
         settings: Settings {
             map,
             centre_map,
-            particles: options.particles.or(particles_for(task.dofs()?.len())),
+            particles: options.particles,
             iterations: options.iterations,
             sigma_torque: options.sigma_torque,
             sigma_force: options.sigma_force,
@@ -965,14 +965,6 @@ fn open_eye(
     note(SetupNote::VisionModel(path.clone()));
     config.settings.vision = Some(path);
     Ok(Some(eye))
-}
-
-/// Particles the harness asks of the FMU for `dofs` uncertain DOFs where its user sets
-/// none: the FMU's default (4000) for two, twice as many per DOF beyond (a 4-DOF grip task
-/// with 4000 kept the truth within 2 sigma in 25 % of contacts and needed 5.3 contacts, with
-/// 16000 in 91 % and 4.2, in the map world).
-fn particles_for(dofs: usize) -> Option<i32> {
-    (dofs > 2).then(|| 4000 << (dofs - 2).min(4))
 }
 
 /// Refuses a task whose uncertain DOFs the work cell cannot set: its robot moves x and y

@@ -73,7 +73,6 @@ fn five_trials_with_an_unknown_grip_go_in_through_the_fmu() {
         twist: None,
         settings: Settings {
             map: Some(grip_map(&task)),
-            particles: Some(16000),
             ..Settings::default()
         },
     };

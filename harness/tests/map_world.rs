@@ -217,7 +217,6 @@ fn without_mismatch_the_spread_over_a_yaw_is_calibrated() {
         }),
         settings: Settings {
             map: Some(file),
-            particles: Some(16_000),
             ..Settings::default()
         },
     };

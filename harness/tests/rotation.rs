@@ -207,7 +207,6 @@ fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
         }),
         settings: Settings {
             map: Some(map),
-            particles: Some(8000),
             ..Settings::default()
         },
     };

@@ -266,10 +266,10 @@ pub const VARIABLES: &[Variable] = &[
         "particles",
         101,
         Integer,
-        Start::Integer(4000),
+        Start::Integer(0),
         "",
-        [Some(10.0), Some(1_000_000.0)],
-        "Number of particles",
+        [Some(0.0), Some(1_000_000.0)],
+        "Number of particles, at least 10; 0: automatic, 4000 for up to two uncertain DOFs and four times as many per DOF beyond (16000 for three, 64000 for four)",
     ),
     param(
         "seed",

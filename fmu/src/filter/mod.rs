@@ -53,10 +53,21 @@ const PROBE_STREAM: u64 = 0x9E37_79B9_7F4A_7C15;
 /// a broken signal, not a measurement (and its square would overflow the likelihood).
 pub const MAX_INPUT: f64 = 1.0e6;
 
+/// Particles for a map of `dofs` uncertain DOFs where the user sets none: 4000 for up to
+/// two, four times as many per DOF beyond, at most [`MAX_PARTICLES`] (octagon_yaw's x, y and
+/// yaw with 8000 kept the truth within 2 sigma in 80 % of contacts, with 16000 in 84-86 %).
+pub fn automatic_particles(dofs: usize) -> usize {
+    let beyond = dofs.saturating_sub(2).min(8) as u32;
+    (4000usize << (2 * beyond)).min(MAX_PARTICLES)
+}
+
+/// The most particles a filter holds.
+pub const MAX_PARTICLES: usize = 1_000_000;
+
 /// Settings of the filter (the FMU's parameters, checked).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Config {
-    /// Number of particles.
+    /// Number of particles; 0: [`automatic_particles`] for the map.
     pub particles: usize,
     /// Seed of the random numbers.
     pub seed: u64,
@@ -103,7 +114,7 @@ pub struct Config {
 impl Default for Config {
     fn default() -> Self {
         Self {
-            particles: 4000,
+            particles: 0,
             seed: 1,
             iterations: 20,
             sigma_force: 1.0,
@@ -195,6 +206,13 @@ impl Filter {
 
     /// A filter over an already prepared map (shared between filters).
     pub fn with_lookup(lookup: Arc<Lookup>, cfg: Config) -> Self {
+        let cfg = Config {
+            particles: match cfg.particles {
+                0 => automatic_particles(lookup.ndim()),
+                n => n,
+            },
+            ..cfg
+        };
         let n = cfg.particles;
         let d = lookup.ndim();
         let clearance = match cfg.clearance {

@@ -1108,3 +1108,20 @@ fn a_centre_map_answers_within_its_region_and_the_map_beyond_it() {
         .to_string();
     assert!(e.contains("coarser"), "{e}");
 }
+
+#[test]
+fn particles_zero_picks_four_times_as_many_per_dof_beyond_two() {
+    let cfg = Config {
+        particles: 0,
+        ..Config::default()
+    };
+    let flat = peg_map(5e-3, 2.5e-4, None).expect("map");
+    let tilted = peg_map(1e-3, 5e-4, Some((0.01, 0.005))).expect("map");
+    for (map, want) in [(flat, 4000), (tilted, 64000)] {
+        let f = Filter::new(&map, Path::new("synthetic"), cfg).expect("filter");
+        assert_eq!(f.config().particles, want);
+        assert_eq!(f.pos.len(), want * map.grid().ndim());
+    }
+    assert_eq!(automatic_particles(3), 16000);
+    assert_eq!(automatic_particles(12), MAX_PARTICLES);
+}
