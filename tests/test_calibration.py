@@ -1,7 +1,7 @@
 """The harness's calibration figures (summary.json) against NumPy on the same campaign's
 measurements.csv: the fraction of contact measurements whose true offset lies within the
 reported 1- and 2-sigma ellipse (of the reported spreads and their correlation), per DOF,
-and the mean NEES."""
+and the mean and median NEES."""
 
 import csv
 import json
@@ -63,4 +63,5 @@ def test_calibration_figures_agree_with_numpy(fmu_path, tmp_path):
         assert agrees(d["within_2sigma"], np.abs(z[:, k]), 2.0)
     assert np.isclose(c["nees_mean"], nees.mean(), rtol=1e-3)
     assert c["nees_ideal"] == 2
+    assert np.isclose(c["nees_median"], np.median(nees), rtol=1e-3)
     np.testing.assert_allclose(col("nees"), nees, rtol=1e-3, atol=1e-6)

@@ -7,7 +7,10 @@
 //! region is the ellipse of that covariance C. For a calibrated 2-D Gaussian estimate, the
 //! true offset lies within the 1-sigma ellipse in 1 - e^(-1/2) = 39.3 % of measurements and
 //! within the 2-sigma ellipse in 1 - e^(-2) = 86.5 %; per DOF within 1 and 2 sigma in 68.3 %
-//! and 95.4 %; and the NEES, e^T C^-1 e for the error e, has mean 2 (the DOF count).
+//! and 95.4 %; and the NEES, e^T C^-1 e for the error e, has mean 2 (the DOF count) and
+//! median 2 ln 2 = 1.386 (a chi-square of 2 DOFs). The mean is a few measurements' where a
+//! set locks off the truth with a narrow spread (a NEES of thousands); the median is the
+//! typical measurement's.
 
 use serde::Serialize;
 
@@ -156,7 +159,13 @@ pub struct Calibration {
     pub nees_mean: f64,
     /// The ideal mean NEES: the number of DOFs.
     pub nees_ideal: f64,
+    /// Median NEES (ideal [`NEES_MEDIAN_IDEAL`]; the mean of the middle two of an even
+    /// count).
+    pub nees_median: f64,
 }
+
+/// The median of a chi-square of 2 DOFs, 2 ln 2: a calibrated estimate's median NEES.
+pub const NEES_MEDIAN_IDEAL: f64 = 2.0 * std::f64::consts::LN_2;
 
 impl Calibration {
     /// The calibration of `samples`; fractions and the mean are NaN when there are none.
@@ -181,6 +190,7 @@ impl Calibration {
             per_dof,
             nees_mean: samples.iter().map(Sample::nees).sum::<f64>() / n,
             nees_ideal: DOFS.len() as f64,
+            nees_median: median(samples.iter().map(Sample::nees).collect()),
         }
     }
 
@@ -188,13 +198,25 @@ impl Calibration {
     pub fn line(&self) -> String {
         let pct = |f: f64| format!("{:.1} %", 100.0 * f);
         format!(
-            "{} / {} (ideal 39.3 / 86.5 %), NEES mean {:.2} (ideal {}) over {} measurements",
+            "{} / {} (ideal 39.3 / 86.5 %), NEES mean {:.2} (ideal {}), median {:.2} (ideal {:.2}) over {} measurements",
             pct(self.within_1sigma),
             pct(self.within_2sigma),
             self.nees_mean,
             self.nees_ideal,
+            self.nees_median,
+            NEES_MEDIAN_IDEAL,
             self.measurements
         )
+    }
+}
+
+/// The median of `values` (NaN for none).
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    match values.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => values[n / 2],
+        n => 0.5 * (values[n / 2 - 1] + values[n / 2]),
     }
 }
 
@@ -252,6 +274,7 @@ mod tests {
             );
         }
         assert!((c.nees_mean - 2.0).abs() < 0.05, "{c:?}");
+        assert!((c.nees_median - NEES_MEDIAN_IDEAL).abs() < 0.02, "{c:?}");
     }
 
     #[test]
@@ -282,5 +305,13 @@ mod tests {
         // A collapsed spread counts as MIN_STD, not as zero.
         let collapsed = Calibration::of(&[sample([1e-6, 0.0], [0.0, 0.0])]);
         assert!(collapsed.nees_mean.is_finite() && collapsed.nees_mean > 1e5);
+        // One locked measurement moves the mean, not the median.
+        let mut typical: Vec<Sample> = (0..9).map(|_| sample([1e-5, 0.0], [1e-5, 1e-5])).collect();
+        typical.push(sample([1e-2, 0.0], [1e-5, 1e-5]));
+        let c = Calibration::of(&typical);
+        assert!(
+            c.nees_mean > 1e5 && (c.nees_median - 1.0).abs() < 1e-9,
+            "{c:?}"
+        );
     }
 }
