@@ -168,7 +168,7 @@ pub struct Calibration {
 pub const NEES_MEDIAN_IDEAL: f64 = 2.0 * std::f64::consts::LN_2;
 
 impl Calibration {
-    /// The calibration of `samples`; fractions and the mean are NaN when there are none.
+    /// The calibration of `samples`; fractions, mean and median are NaN when there are none.
     pub fn of(samples: &[Sample]) -> Self {
         let n = samples.len() as f64;
         let fraction = |inside: &dyn Fn(&Sample) -> bool| {
