@@ -183,14 +183,16 @@ impl Calibration {
                 within_2sigma: fraction(&|s| s.z()[k].abs() <= 2.0),
             })
             .collect();
+        let nees: Vec<f64> = samples.iter().map(Sample::nees).collect();
+        let within = |bound: f64| nees.iter().filter(|&&v| v <= bound).count() as f64 / n;
         Self {
             measurements: samples.len(),
-            within_1sigma: fraction(&|s| s.nees() <= 1.0),
-            within_2sigma: fraction(&|s| s.nees() <= 4.0),
+            within_1sigma: within(1.0),
+            within_2sigma: within(4.0),
             per_dof,
-            nees_mean: samples.iter().map(Sample::nees).sum::<f64>() / n,
+            nees_mean: nees.iter().sum::<f64>() / n,
             nees_ideal: DOFS.len() as f64,
-            nees_median: median(samples.iter().map(Sample::nees).collect()),
+            nees_median: median(nees),
         }
     }
 
