@@ -15,8 +15,9 @@ use crate::trace::Trace;
 /// First bytes of a saved FMU state.
 pub const STATE_MAGIC: [u8; 8] = *b"FTFSTATE";
 /// Version of the saved-state layout (2: the `vision.valid` edge; 3: the filter's evidence
-/// that its particles are lost; 4: the `centre_map` parameter; 5: `mismatch_position`).
-pub const STATE_VERSION: u32 = 5;
+/// that its particles are lost; 4: the `centre_map` parameter; 5: `mismatch_position`; 6:
+/// `mismatch_interpolation`).
+pub const STATE_VERSION: u32 = 6;
 
 /// FMI 2.0 status of a call.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]

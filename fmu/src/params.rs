@@ -224,6 +224,7 @@ impl Params {
             mismatch: checked(store, "mismatch")?,
             mismatch_angle: checked(store, "mismatch_angle")?,
             mismatch_position: checked(store, "mismatch_position")?,
+            mismatch_interpolation: checked(store, "mismatch_interpolation")?,
             lost: checked(store, "lost")?,
         };
         let map = store.string(index_of("map")).to_owned();

@@ -48,6 +48,8 @@ pub struct Settings {
     pub mismatch_angle: Option<f64>,
     /// `mismatch_position` (m).
     pub mismatch_position: Option<f64>,
+    /// `mismatch_interpolation` (share of the lookup's interpolation error).
+    pub mismatch_interpolation: Option<f64>,
     /// `lost` (prior probability per measurement that the particles lost the truth).
     pub lost: Option<f64>,
     /// `vision`: an absolute path of a vision model file.
@@ -117,6 +119,7 @@ struct Refs {
     mismatch: u32,
     mismatch_angle: u32,
     mismatch_position: u32,
+    mismatch_interpolation: u32,
     lost: u32,
     sigma_force: u32,
     sigma_depth: u32,
@@ -216,6 +219,7 @@ impl Fmu {
             mismatch: vr("mismatch")?,
             mismatch_angle: vr("mismatch_angle")?,
             mismatch_position: vr("mismatch_position")?,
+            mismatch_interpolation: vr("mismatch_interpolation")?,
             lost: vr("lost")?,
             sigma_force: vr("sigma_force")?,
             sigma_depth: vr("sigma_depth")?,
@@ -291,6 +295,11 @@ impl Fmu {
                 r.mismatch_position,
                 settings.mismatch_position,
                 "mismatch_position",
+            ),
+            (
+                r.mismatch_interpolation,
+                settings.mismatch_interpolation,
+                "mismatch_interpolation",
             ),
             (r.lost, settings.lost, "lost"),
             (r.sigma_vision, settings.sigma_vision, "sigma_vision"),

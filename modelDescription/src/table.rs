@@ -445,6 +445,21 @@ pub const VARIABLES: &[Variable] = &[
          components grows by its square times their squared slope at the particle (steep near \
          the hole, flat far from it), with the likelihood's normalisation; 0: none",
     ),
+    param(
+        "mismatch_interpolation",
+        119,
+        Real,
+        Start::Real(1.0),
+        "",
+        [Some(0.0), Some(100.0)],
+        "Share of the multilinear lookup's own error that counts as model mismatch: the \
+         variance of the force's and torque's x and y components grows by it times the mean \
+         square of the interpolation error that the map's second differences imply at the \
+         particle (large within a few cells of the hole, where the rim torque turns), with \
+         the likelihood's normalisation; 1: as the map implies it, 0: none (e.g. a world that \
+         is the interpolated map itself). The nearest-cell lookup counts its cell's width in \
+         the position term instead",
+    ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
         "vision",

@@ -22,9 +22,12 @@ use crate::error::{FusionError, Result};
 
 /// Channels per padded cell: fx fy fz tx ty tz depth, contact (1) or inserted (0).
 pub const LANES: usize = 8;
-/// Squared slopes per cell: the force's and the torque's (each the mean over its x and y
-/// components, across the tool's axis).
-const SLOPES: usize = 2;
+/// Mismatch terms per cell: the squared slopes of the force and of the torque ([`slopes`]),
+/// then the variances of their multilinear interpolation error ([`interpolation_errors`]);
+/// each the mean over the vector's x and y components, across the tool's axis.
+const TERMS: usize = 4;
+/// The first of the interpolation-error terms.
+const INTERPOLATION: usize = 2;
 /// The lane that flags a contact cell.
 const CONTACT: usize = LANES - 1;
 
@@ -127,6 +130,9 @@ pub struct Lookup {
     /// Per axis, the fit's rotational play at zero offset (grid units; 0 but on object
     /// rotations).
     play: Vec<f32>,
+    /// The widest step of the axes that move the contact, in metres of its motion (step
+    /// times lever, [`levers`]).
+    widest: f64,
 }
 
 /// One grid of padded cells: the map's, or its centre map's.
@@ -134,15 +140,15 @@ pub struct Lookup {
 struct Level {
     axes: Vec<MapAxis>,
     cells: Vec<[f32; LANES]>,
-    /// Per cell, the squared slopes of its force and torque ([`slopes`]).
-    slopes: Vec<[f32; SLOPES]>,
+    /// Per cell, its mismatch terms ([`TERMS`]).
+    terms: Vec<[f32; TERMS]>,
 }
 
-/// The channels at a point of the map and the squared slopes of its force and torque there.
+/// The channels at a point of the map and its mismatch terms there ([`TERMS`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Sample {
     lanes: [f32; LANES],
-    slopes: [f32; SLOPES],
+    terms: [f32; TERMS],
 }
 
 /// The centre map's cells and where its grid lies on the map's.
@@ -171,7 +177,9 @@ struct Params<const D: usize> {
 /// and y components of the force and the torque (across the tool's axis, where a contact
 /// displaced across it moves them) get that much more variance per unit of their squared
 /// slope at the particle, and the likelihood its normalisation (a particle on a steep slope
-/// explains a wide range of measurements, each less well).
+/// explains a wide range of measurements, each less well). The multilinear lookup's own
+/// error, large where the field bends within a cell (round the hole, where the rim torque
+/// turns), adds its variance to the same components (`interpolation`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Weights {
     /// Measured channels, padded.
@@ -186,6 +194,10 @@ pub struct Weights {
     /// squared slope (m^2: the square of the position the map may miss, in each axis across
     /// the approach).
     pub position: f32,
+    /// Share of the lookup's interpolation-error variance ([`interpolation_errors`]) that
+    /// counts: the `mismatch_interpolation` parameter for the multilinear lookup, 0 for the
+    /// nearest cell (whose error, the cell's width, is in `position`).
+    pub interpolation: f32,
     /// Degrees of freedom of a Student-t likelihood over the channels used; 0: Gaussian.
     pub tail: f32,
     /// The channels used (inverse variance above 0), counted once by [`Weights::student`].
@@ -213,18 +225,18 @@ impl Weights {
     }
 
     /// Log-likelihood of the predicted channels `pred`, whose force and torque have the
-    /// squared slopes `slopes` (constants of the measurement dropped: 0 for a perfect
-    /// prediction without slope). The contact lane's inverse variance is 0.
+    /// mismatch terms `terms` ([`TERMS`]; constants of the measurement dropped: 0 for a
+    /// perfect prediction without them). The contact lane's inverse variance is 0.
     #[inline(always)]
-    fn log_likelihood(&self, pred: &[f32; LANES], slopes: &[f32; SLOPES]) -> f32 {
+    fn log_likelihood(&self, pred: &[f32; LANES], terms: &[f32; TERMS]) -> f32 {
         let mut chi2 = 0.0;
-        // How much larger the determinant of the covariance is than without the slopes.
+        // How much larger the determinant of the covariance is than without the terms.
         let mut ratio = 1.0f32;
         for g in 0..2 {
             let r: [f32; 3] = std::array::from_fn(|k| self.meas[3 * g + k] - pred[3 * g + k]);
             let a = &self.axis[g];
             let across = self.inv_var[3 * g];
-            let extra = self.position * slopes[g];
+            let extra = self.position * terms[g] + self.interpolation * terms[INTERPOLATION + g];
             if extra > 0.0 && across > 0.0 {
                 // Covariance D + c a a^T, D diagonal: the variance across plus `extra` on x
                 // and y, c the variance along less that across; its inverse by
@@ -306,6 +318,11 @@ impl Lookup {
         let depth_range = map.depth_range();
         let (cells, largest) = padded(map, depth_range, path)?;
         let levers = levers(map);
+        let widest = axes
+            .iter()
+            .zip(&levers)
+            .map(|(a, l)| a.step * l)
+            .fold(0.0, f64::max);
         let play = axes
             .iter()
             .enumerate()
@@ -320,7 +337,15 @@ impl Lookup {
             clearance: map.meta().clearance,
             largest,
             play,
+            widest,
         })
+    }
+
+    /// The mean square (m^2, per axis) of how far the nearest cell's centre lies from a
+    /// point in its cell along the map's widest step that moves the contact: `step^2 / 12`,
+    /// the position the nearest-cell lookup misses (on a centre map's finer cells, less).
+    pub fn nearest_variance(&self) -> f64 {
+        self.widest * self.widest / 12.0
     }
 
     /// Prepares `map` (file `path`) with its centre map `centre` (file `centre_path`),
@@ -559,7 +584,7 @@ impl Lookup {
             let t = Self::clamped(rel, n, i, &params.0.top);
             let (level, p, u) = self.level_at(t, &params);
             let idx: usize = (0..D).map(|k| (u[k] + 0.5) as usize * p.stride[k]).sum();
-            *o = w.log_likelihood(&level.cells[idx], &level.slopes[idx]);
+            *o = w.log_likelihood(&level.cells[idx], &level.terms[idx]);
         }
     }
 
@@ -570,7 +595,7 @@ impl Lookup {
             let t = Self::clamped(rel, n, i, &params.0.top);
             let (level, p, u) = self.level_at(t, &params);
             let at = level.linear(p, u);
-            *o = w.log_likelihood(&at.lanes, &at.slopes);
+            *o = w.log_likelihood(&at.lanes, &at.terms);
         }
     }
 
@@ -586,20 +611,21 @@ impl Lookup {
                 };
             }
             let at = self.sample(&u);
-            *o = w.log_likelihood(&at.lanes, &at.slopes);
+            *o = w.log_likelihood(&at.lanes, &at.terms);
         }
     }
 }
 
 impl Level {
-    /// A level of `cells` on `axes`, with their slopes ([`slopes`]: `levers` per axis).
+    /// A level of `cells` on `axes`, with their mismatch terms: the slopes ([`slopes`],
+    /// `levers` per axis) and the interpolation errors ([`interpolation_errors`]).
     fn new(axes: Vec<MapAxis>, cells: Vec<[f32; LANES]>, levers: &[f64]) -> Self {
-        let slopes = slopes(&axes, &cells, levers);
-        Self {
-            axes,
-            cells,
-            slopes,
-        }
+        let terms = slopes(&axes, &cells, levers)
+            .into_iter()
+            .zip(interpolation_errors(&axes, &cells))
+            .map(|([f, t], [ef, et])| [f, t, ef, et])
+            .collect();
+        Self { axes, cells, terms }
     }
 
     /// The lookup parameters of its first `D` axes.
@@ -644,24 +670,24 @@ impl Level {
             len *= 2;
         }
         let mut acc = [0.0f32; LANES];
-        let mut slopes = [0.0f32; SLOPES];
+        let mut terms = [0.0f32; TERMS];
         for (wt, &c) in wts.iter().zip(&idx).take(1 << D) {
             let cell = &self.cells[c];
             for l in 0..LANES {
                 acc[l] += wt * cell[l];
             }
-            for (s, v) in slopes.iter_mut().zip(&self.slopes[c]) {
+            for (s, v) in terms.iter_mut().zip(&self.terms[c]) {
                 *s += wt * v;
             }
         }
-        over_contacts(&mut acc, &mut slopes);
-        Sample { lanes: acc, slopes }
+        over_contacts(&mut acc, &mut terms);
+        Sample { lanes: acc, terms }
     }
 
     /// Multilinear channels at coordinates `t` within the grid, any number of axes.
     fn at(&self, t: &[f32]) -> Sample {
         let mut out = [0.0; LANES];
-        let mut slopes = [0.0f32; SLOPES];
+        let mut terms = [0.0f32; TERMS];
         let n = t.len().min(self.axes.len());
         let mut base = 0;
         let mut frac = [0.0f32; MAX_AXES];
@@ -685,13 +711,13 @@ impl Level {
                 for (o, v) in out.iter_mut().zip(&self.cells[idx]) {
                     *o += w * v;
                 }
-                for (s, v) in slopes.iter_mut().zip(&self.slopes[idx]) {
+                for (s, v) in terms.iter_mut().zip(&self.terms[idx]) {
                     *s += w * v;
                 }
             }
         }
-        over_contacts(&mut out, &mut slopes);
-        Sample { lanes: out, slopes }
+        over_contacts(&mut out, &mut terms);
+        Sample { lanes: out, terms }
     }
 }
 
@@ -761,14 +787,14 @@ fn inserted(depth_range: Option<[f32; 2]>, height: f64) -> bool {
     depth_range.is_some_and(|[lo, hi]| height < 0.5 * f64::from(lo + hi))
 }
 
-/// Renormalises an interpolated wrench and its slopes over the contact corners (their
-/// weight is the contact lane); with none, the masked zeros stay.
+/// Renormalises an interpolated wrench and its mismatch terms over the contact corners
+/// (their weight is the contact lane); with none, the masked zeros stay.
 #[inline(always)]
-fn over_contacts(acc: &mut [f32; LANES], slopes: &mut [f32; SLOPES]) {
+fn over_contacts(acc: &mut [f32; LANES], terms: &mut [f32; TERMS]) {
     let w = acc[CONTACT];
     if w > 0.0 && w < 1.0 {
         let s = 1.0 / w;
-        for v in acc[..NCH - 1].iter_mut().chain(slopes.iter_mut()) {
+        for v in acc[..NCH - 1].iter_mut().chain(terms.iter_mut()) {
             *v *= s;
         }
     }
@@ -801,54 +827,85 @@ fn levers(map: &FtMap) -> Vec<f64> {
 /// cells (round a periodic axis), one-sided beside an inserted cell or the grid's edge; 0
 /// on an inserted cell. How much a wrench changes when the contact sits elsewhere than the
 /// map has it.
-fn slopes(axes: &[MapAxis], cells: &[[f32; LANES]], levers: &[f64]) -> Vec<[f32; SLOPES]> {
+fn slopes(axes: &[MapAxis], cells: &[[f32; LANES]], levers: &[f64]) -> Vec<[f32; 2]> {
     let moved: Vec<(&MapAxis, f64)> = axes
         .iter()
         .zip(levers.iter().copied())
         .filter(|(a, lever)| *lever > 0.0 && a.count > 1)
         .collect();
-    let contact = |i: usize| cells[i][CONTACT] > 0.0;
+    per_contact_cell(cells, |i, out| {
+        for &(a, lever) in &moved {
+            let (from, to, steps) = match (along(a, cells, i, -1), along(a, cells, i, 1)) {
+                (Some(l), Some(h)) => (l, h, 2.0),
+                (Some(l), None) => (l, i, 1.0),
+                (None, Some(h)) => (i, h, 1.0),
+                (None, None) => continue,
+            };
+            let h = (steps * a.step * lever) as f32;
+            add_xy_mean(out, |l| ((cells[to][l] - cells[from][l]) / h).powi(2));
+        }
+    })
+}
+
+/// Per cell, the mean squared error of the multilinear lookup within the cells around it,
+/// for the force and the torque (each the mean over its x and y components, in N^2 and
+/// (N.m)^2): per axis, a field with the second difference `d` across three samples is
+/// missed by `d t (1 - t) / 2` at a fraction `t` of a step, whose mean square over the step
+/// is `d^2 / 120`; summed over the axes (the cross terms dropped). Second differences are
+/// taken between contact cells, centred (round a periodic axis) or one-sided beside an
+/// inserted cell or the grid's edge; 0 where there are not three in a row, and on an
+/// inserted cell.
+fn interpolation_errors(axes: &[MapAxis], cells: &[[f32; LANES]]) -> Vec<[f32; 2]> {
+    per_contact_cell(cells, |i, out| {
+        for a in axes.iter().filter(|a| a.count > 2) {
+            let triple = [[-1, 0, 1], [0, 1, 2], [-2, -1, 0]]
+                .into_iter()
+                .find_map(|ks| match ks.map(|k| along(a, cells, i, k)) {
+                    [Some(p), Some(q), Some(r)] => Some([p, q, r]),
+                    _ => None,
+                });
+            let Some([p, q, r]) = triple else { continue };
+            add_xy_mean(out, |l| {
+                (cells[p][l] - 2.0 * cells[q][l] + cells[r][l]).powi(2) / 120.0
+            });
+        }
+    })
+}
+
+/// Per cell, the force's and the torque's values that `fill` adds up for a contact cell
+/// (index, output); 0 on an inserted cell.
+fn per_contact_cell(cells: &[[f32; LANES]], fill: impl Fn(usize, &mut [f32; 2])) -> Vec<[f32; 2]> {
     (0..cells.len())
         .map(|i| {
-            let mut out = [0.0f32; SLOPES];
-            if !contact(i) {
-                return out;
-            }
-            for &(a, lever) in &moved {
-                let at = i / a.stride % a.count;
-                let base = i - at * a.stride;
-                // A periodic axis's last sample is its first: its neighbours wrap past it.
-                let last = a.count - 1;
-                let neighbour =
-                    |j: Option<usize>| j.map(|j| base + j * a.stride).filter(|&n| contact(n));
-                let (lo, hi) = if a.period.is_some() {
-                    (
-                        neighbour(Some(if at == 0 { last - 1 } else { at - 1 })),
-                        neighbour(Some(if at == last { 1 } else { at + 1 })),
-                    )
-                } else {
-                    (
-                        neighbour(at.checked_sub(1)),
-                        neighbour((at < last).then_some(at + 1)),
-                    )
-                };
-                let (from, to, steps) = match (lo, hi) {
-                    (Some(l), Some(h)) => (l, h, 2.0),
-                    (Some(l), None) => (l, i, 1.0),
-                    (None, Some(h)) => (i, h, 1.0),
-                    (None, None) => continue,
-                };
-                let h = (steps * a.step * lever) as f32;
-                for (g, o) in out.iter_mut().enumerate() {
-                    *o += [3 * g, 3 * g + 1]
-                        .iter()
-                        .map(|&l| 0.5 * ((cells[to][l] - cells[from][l]) / h).powi(2))
-                        .sum::<f32>();
-                }
+            let mut out = [0.0f32; 2];
+            if cells[i][CONTACT] > 0.0 {
+                fill(i, &mut out);
             }
             out
         })
         .collect()
+}
+
+/// The contact cell `k` samples from cell `i` along axis `a` (round a periodic axis,
+/// whose last sample is its first), if there is one.
+fn along(a: &MapAxis, cells: &[[f32; LANES]], i: usize, k: isize) -> Option<usize> {
+    let at = (i / a.stride % a.count) as isize;
+    let base = i - at as usize * a.stride;
+    let last = (a.count - 1) as isize;
+    let j = match a.period {
+        Some(_) => (at + k).rem_euclid(last),
+        None => Some(at + k).filter(|j| (0..=last).contains(j))?,
+    };
+    let n = base + j as usize * a.stride;
+    (cells[n][CONTACT] > 0.0).then_some(n)
+}
+
+/// Adds to `out`, for the force (0) and the torque (1), the mean of `value` over the
+/// vector's x and y lanes.
+fn add_xy_mean(out: &mut [f32; 2], value: impl Fn(usize) -> f32) {
+    for (g, o) in out.iter_mut().enumerate() {
+        *o += 0.5 * value(3 * g) + 0.5 * value(3 * g + 1);
+    }
 }
 
 #[cfg(test)]
@@ -860,17 +917,19 @@ mod tests {
 
     use super::*;
 
-    /// The slopes' log-likelihood in f64 with each group's covariance written out: across
-    /// `va`, along the measured vector `vb`, plus `position` times the slope on x and y;
-    /// less the log determinant of the covariance without slopes.
-    fn written_out(w: &Weights, pred: &[f32; LANES], slopes: &[f32; SLOPES]) -> f64 {
+    /// The terms' log-likelihood in f64 with each group's covariance written out: across
+    /// `va`, along the measured vector `vb`, plus `position` times the slope and
+    /// `interpolation` times the interpolation error on x and y; less the log determinant
+    /// of the covariance without them.
+    fn written_out(w: &Weights, pred: &[f32; LANES], terms: &[f32; TERMS]) -> f64 {
         let mut ll = 0.0;
         for g in 0..2 {
             let a = Vector3::from_iterator(w.axis[g].iter().map(|v| f64::from(*v)));
             let va = 1.0 / f64::from(w.inv_var[3 * g]);
             let vb = 1.0 / (f64::from(w.inv_var[3 * g]) + f64::from(w.along[g]));
             let base = Matrix3::identity() * va + a * a.transpose() * (vb - va);
-            let e = f64::from(w.position) * f64::from(slopes[g]);
+            let e = f64::from(w.position) * f64::from(terms[g])
+                + f64::from(w.interpolation) * f64::from(terms[INTERPOLATION + g]);
             let slope = Matrix3::from_diagonal(&Vector3::new(e, e, 0.0));
             let cov = base + slope;
             let r = Vector3::from_iterator(
@@ -883,7 +942,7 @@ mod tests {
     }
 
     #[test]
-    fn slopes_widen_the_likelihood_as_the_covariance_written_out_does() {
+    fn mismatch_terms_widen_the_likelihood_as_the_covariance_written_out_does() {
         let meas = [0.3, -0.2, 20.0, 0.12, 0.05, 0.001, 0.0, 0.0];
         let pred = [0.25, -0.1, 19.0, 0.10, 0.07, 0.0, 0.0, 1.0];
         let unit = |v: &[f32]| {
@@ -901,20 +960,28 @@ mod tests {
             axis: [unit(&meas[..3]), unit(&meas[3..6])],
             along: [1.0 / vb[0] - 1.0 / va[0], 1.0 / vb[1] - 1.0 / va[1]],
             position: 2.5e-11,
+            interpolation: 0.7,
             ..Weights::default()
         };
-        for slopes in [[1e9, 4e6], [0.0, 6e6], [4e8, 0.0], [0.0; SLOPES]] {
-            let got = f64::from(w.log_likelihood(&pred, &slopes));
-            let want = written_out(&w, &pred, &slopes);
+        for terms in [
+            [1e9, 4e6, 0.0, 0.0],
+            [0.0, 6e6, 0.0, 0.0],
+            [4e8, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 2e-3, 4e-5],
+            [1e9, 4e6, 0.0, 2e-4],
+            [0.0; TERMS],
+        ] {
+            let got = f64::from(w.log_likelihood(&pred, &terms));
+            let want = written_out(&w, &pred, &terms);
             assert!(
                 (got - want).abs() < 1e-4 * (1.0 + want.abs()),
-                "slopes {slopes:?}: {got} against {want}"
+                "terms {terms:?}: {got} against {want}"
             );
         }
         // Steeper, the same residual costs less, and a perfect prediction more.
-        let steep = [0.0, 6e6];
-        assert!(w.log_likelihood(&pred, &steep) > w.log_likelihood(&pred, &[0.0; SLOPES]));
-        assert!(w.log_likelihood(&meas, &steep) < w.log_likelihood(&meas, &[0.0; SLOPES]));
+        let steep = [0.0, 6e6, 0.0, 0.0];
+        assert!(w.log_likelihood(&pred, &steep) > w.log_likelihood(&pred, &[0.0; TERMS]));
+        assert!(w.log_likelihood(&meas, &steep) < w.log_likelihood(&meas, &[0.0; TERMS]));
     }
 
     #[test]
@@ -938,21 +1005,54 @@ mod tests {
                 -FORCE * x * y / (r * r) * (dl - l / r),
             ];
             let want = 0.5 * (dtx[0].powi(2) + dtx[1].powi(2) + dty[0].powi(2) + dty[1].powi(2));
-            let got = f64::from(level.slopes[i][1]);
+            let got = f64::from(level.terms[i][1]);
             assert!(
                 (got - want).abs() < 0.05 * want,
                 "({x}, {y}): {got} against {want}"
             );
             // The force does not change with x, y in this field; the hole's cells none.
-            assert!(level.slopes[i][0] < 1e-6);
+            assert!(level.terms[i][0] < 1e-6);
         }
         let centre = level.axes[0].coord(0.0).round() as usize * level.axes[0].stride
             + level.axes[1].coord(0.0).round() as usize * level.axes[1].stride;
-        assert_eq!(level.slopes[centre], [0.0; SLOPES]);
+        assert_eq!(level.terms[centre], [0.0; TERMS]);
         assert!(
             field(0.0, 0.0, 0.0, 0.0)[6] == 0.0,
             "the field's centre is inserted"
         );
+    }
+
+    #[test]
+    fn the_interpolation_error_terms_match_the_lookups_own_error() {
+        // The analytic field read through a 0.1 mm map: in rings round the hole, where the
+        // rim torque turns within a cell, the mean square of the lookup's torque error
+        // against the field's (x and y components) is what the terms say it is.
+        let map = peg_map(5e-3, 1e-4, None).expect("map");
+        let lookup = Lookup::new(&map, Path::new("synthetic")).expect("lookup");
+        let [ax, ay] = [lookup.level.axes[0], lookup.level.axes[1]];
+        for (inner, outer) in [(1.5e-4, 3e-4), (3e-4, 6e-4), (6e-4, 1.5e-3)] {
+            let (mut actual, mut said, mut n) = (0.0f64, 0.0f64, 0.0);
+            for i in 0..200 {
+                for j in 0..24 {
+                    let r = inner + (outer - inner) * (f64::from(i) + 0.5) / 200.0;
+                    let phi = std::f64::consts::TAU * (f64::from(j) + 0.37) / 24.0;
+                    let (x, y) = (r * phi.cos(), r * phi.sin());
+                    let s = lookup.sample(&[ax.coord(x), ay.coord(y)]);
+                    let want = field(x, y, 0.0, 0.0);
+                    actual += 0.5
+                        * (f64::from(s.lanes[3] - want[3]).powi(2)
+                            + f64::from(s.lanes[4] - want[4]).powi(2));
+                    said += f64::from(s.terms[INTERPOLATION + 1]);
+                    n += 1.0;
+                }
+            }
+            let (actual, said) = ((actual / n).sqrt(), (said / n).sqrt());
+            eprintln!("ring {inner}-{outer}: error rms {actual:.2e}, terms {said:.2e}");
+            assert!(
+                said > 0.5 * actual && said < 2.0 * actual,
+                "ring {inner}-{outer} m: the lookup misses the torque by {actual:.2e} N.m rms, the terms say {said:.2e}"
+            );
+        }
     }
 
     #[test]

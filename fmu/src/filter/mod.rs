@@ -104,6 +104,11 @@ pub struct Config {
     /// components grows by its square times their squared slope at the particle (steep near
     /// the hole, flat far from it), with the likelihood's normalisation; 0: none.
     pub mismatch_position: f64,
+    /// Share of the multilinear lookup's interpolation error, as the map's second
+    /// differences imply it, added to the variance of the force's and torque's x and y
+    /// components (with the likelihood's normalisation); 0: none. The nearest-cell lookup
+    /// counts its cell's width in the position term instead.
+    pub mismatch_interpolation: f64,
     /// Prior probability that the particle set has lost the truth (e.g. locked on a wrong
     /// hypothesis by a contact the map did not explain): where the measurements since the
     /// set last explained one better than the prior make that more likely than not, half the
@@ -129,6 +134,7 @@ impl Default for Config {
             mismatch: 0.02,
             mismatch_angle: 0.02,
             mismatch_position: 5e-6,
+            mismatch_interpolation: 1.0,
             lost: 1e-9,
         }
     }
@@ -402,7 +408,16 @@ impl Filter {
             ],
             axis: [f.axis, t.axis],
             along: [f.along, t.along],
-            position: (c.mismatch_position * c.mismatch_position) as f32,
+            position: match c.interpolation {
+                Interpolation::Multilinear => c.mismatch_position.powi(2),
+                Interpolation::Nearest => {
+                    c.mismatch_position.powi(2) + self.lookup.nearest_variance()
+                }
+            } as f32,
+            interpolation: match c.interpolation {
+                Interpolation::Multilinear => c.mismatch_interpolation as f32,
+                Interpolation::Nearest => 0.0,
+            },
             ..Weights::default()
         }
         .student(c.tail as f32);

@@ -313,16 +313,19 @@ fn a_set_locked_on_a_wrong_hypothesis_relocates_and_a_sound_one_does_not() {
     // hypothesis 5 mm off with a spread of a grid step. Relocation redraws particles from
     // the prior at the first contact that the set explains far worse than the prior does.
     // 24 streams (each case on eight). Measured: without relocation never within 6
-    // contacts; with it within 2-4 on all 24. Over 50 streams of each case, the first two
-    // unlock within 4 contacts on every one, the third on 45: it took 5-6 on 3 and more
-    // than 6 on 2, where the redrawn set settled on the saturated rim's ridge. Over 3
-    // streams the bound read 3 (a fourth stream needs 4).
+    // contacts; with it within 2-4 on 20 and 5-6 on 4 (all of the third case). Before the
+    // interpolation term, 2-4 on all 24: a set at the hole, where the lookup's own error is
+    // large, now reads wider, and a contact it does not explain weighs less against it
+    // (with the Student-t tails about 5 nats less per contact), so relocation comes a
+    // contact or two later. Over 48 streams of the third case: with the term 31 unlock in 4
+    // contacts, 9 in 5, 4 in 6, 4 later; without it 33 in 3, 12 in 4, 1 each in 5, 6 and
+    // later.
     let cases = [
         ([-3.0e-3, 2.0e-3], [2.5e-3, -1.5e-3]),
         ([3.5e-3, 3.0e-3], [-1.0e-3, -2.5e-3]),
         ([0.5e-3, -4.0e-3], [-2.0e-3, 3.5e-3]),
     ];
-    let mut quick = 0;
+    let (mut quick, mut unlocked) = (0, 0);
     for seed in 1..=24u64 {
         let (wrong, truth) = cases[(seed as usize - 1) % cases.len()];
         let (with, redrawn) = unlock(seed, Config::default().lost, wrong, truth);
@@ -333,8 +336,10 @@ fn a_set_locked_on_a_wrong_hypothesis_relocates_and_a_sound_one_does_not() {
             "seed {seed}: {without:?} contacts without relocation"
         );
         quick += usize::from(with.is_some_and(|k| k <= 4));
+        unlocked += usize::from(with.is_some());
     }
-    assert!(quick >= 21, "{quick} of 24 streams within 4 contacts");
+    assert!(quick >= 18, "{quick} of 24 streams within 4 contacts");
+    assert!(unlocked >= 22, "{unlocked} of 24 streams within 6 contacts");
     // Contacts the set explains redraw next to nothing: at most a share `lost` of the
     // particles per contact (4 of 4000), where the set is as broad as the prior's reading.
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
@@ -356,7 +361,8 @@ const CASES: u64 = 36;
 /// A world whose torques the map misses by `distort` (contact physics moving the edge
 /// contact's lever): in how many of [`CASES`] cases does the truth stay within 2 sigma on
 /// both axes over three contacts, each at the last estimate, with `mismatch` and
-/// `mismatch_angle` as given (and no position term: each term is tested alone)?
+/// `mismatch_angle` as given (and no position or interpolation term: each term is tested
+/// alone)?
 fn kept_under_a_distorted_torque(distort: fn(&mut [f64]), mismatch: f64, angle: f64) -> usize {
     (0..CASES)
         .filter(|&k| {
@@ -369,6 +375,7 @@ fn kept_under_a_distorted_torque(distort: fn(&mut [f64]), mismatch: f64, angle: 
             f.cfg.mismatch = mismatch;
             f.cfg.mismatch_angle = angle;
             f.cfg.mismatch_position = 0.0;
+            f.cfg.mismatch_interpolation = 0.0;
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(k + 140);
             let mut tcp = [0.0, 0.0];
             (0..3).all(|_| {
@@ -413,6 +420,7 @@ fn kept_under_a_displaced_contact(position: f64) -> usize {
             f.cfg.mismatch = 0.0;
             f.cfg.mismatch_angle = 0.0;
             f.cfg.mismatch_position = position;
+            f.cfg.mismatch_interpolation = 0.0;
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(k + 160);
             [[0.0, 0.0], [1e-4, -1e-4], [-1e-4, 0.5e-4]]
                 .iter()
@@ -905,14 +913,72 @@ fn the_jitter_keeps_a_spread_narrower_than_a_grid_step() {
                 .expect("finite");
             tcp = [f.estimate().pose[0], f.estimate().pose[1]];
         }
-        // Measured: spread 0.010 mm on every stream, error 0.007-0.046 mm: within half a
-        // step, but up to 4.6 times the spread (the interpolated map misses the field's
-        // step at the clearance: issue 10's overconfidence, not this test's subject). Over
-        // one stream (0.024 mm) the bound on the error read 0.03 mm.
+        // Measured: spread 0.009-0.010 mm on every stream, error 0.003-0.041 mm: within
+        // half a step, but up to 4.3 times the spread. The part goes in within two or three
+        // contacts; the contacts after that are insertions, which the depth channel weighs
+        // by its interpolated step, a ramp a cell wide round the hole's centre cell, not by
+        // the clearance's disc (uniform within 0.05 mm: 0.025 mm per axis). A campaign ends
+        // at the insertion, so it never weighs one. Over one stream (0.024 mm) the bound on
+        // the error read 0.03 mm.
         let e = f.estimate();
         assert!(e.std[0].max(e.std[1]) < 4e-5, "seed {seed}: {e:?}");
         assert!(error(&f, truth) < 6e-5, "seed {seed}: {e:?}");
     }
+}
+
+/// Contacts at the estimate round a truth between the grid's cells, in a world that is the
+/// analytic field read through a 0.1 mm map (whose lookup misses the field within a few
+/// cells of the hole), until the part goes in or eight contacts: over 48 streams of
+/// particles and noise, of the contacts after the first (whose spread is the prior's), how
+/// many leave the truth within 2 sigma on both axes, with `mismatch_interpolation` as given?
+/// And how many contacts were there?
+fn kept_near_the_hole(interpolation: f64) -> (usize, usize) {
+    let map = peg_map(5e-3, 1e-4, None).expect("map");
+    let (mut kept, mut contacts) = (0, 0);
+    for seed in 1..=48u64 {
+        let a = 0.4 + 0.7 * seed as f64;
+        let r = (0.6 + 0.05 * (seed % 6) as f64) * 1e-3;
+        let truth = [r * a.cos(), r * a.sin()];
+        let cfg = Config {
+            seed,
+            mismatch_interpolation: interpolation,
+            ..Config::default()
+        };
+        let mut f = Filter::new(&map, Path::new("synthetic"), cfg).expect("filter");
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(80 + seed);
+        let mut tcp = [0.0, 0.0];
+        for k in 0..8 {
+            if (truth[0] - tcp[0]).hypot(truth[1] - tcp[1]) <= ftfusion_testkit::CLEARANCE {
+                break;
+            }
+            f.measure(&measurement(truth[0], truth[1], tcp, 2e-3, &mut rng))
+                .expect("finite");
+            let e = f.estimate();
+            tcp = [e.pose[0], e.pose[1]];
+            if k > 0 {
+                contacts += 1;
+                kept += usize::from((0..2).all(|i| (e.pose[i] - truth[i]).abs() <= 2.0 * e.std[i]));
+            }
+        }
+    }
+    (kept, contacts)
+}
+
+#[test]
+fn the_interpolation_term_keeps_the_truth_within_two_sigma_near_the_hole() {
+    // Measured on four streams: with the term 82-87 % kept (a calibrated Gaussian keeps
+    // about 91 % within 2 sigma on both axes), without it 71-79 %, 5-11 points fewer.
+    let share = |(kept, contacts): (usize, usize)| kept as f64 / contacts as f64;
+    let with = share(kept_near_the_hole(1.0));
+    let without = share(kept_near_the_hole(0.0));
+    assert!(
+        with >= 0.78,
+        "the truth kept in {with:.3} of the contacts with the term"
+    );
+    assert!(
+        without + 0.03 <= with,
+        "without {without:.3}, with {with:.3}"
+    );
 }
 
 /// The analytic map with a 0.5 mm chamfer pair around the hole: beyond the clearance part A

@@ -284,6 +284,10 @@ pub struct RunArgs {
     /// map has it).
     #[arg(long)]
     pub mismatch_position: Option<f64>,
+    /// FMU parameter `mismatch_interpolation` (share of the map lookup's own interpolation
+    /// error that counts as mismatch; 0: none).
+    #[arg(long)]
+    pub mismatch_interpolation: Option<f64>,
     /// Measure the scene's misses against the map before the trials (96 presses, cached) and
     /// hand them to the FMU as `mismatch` and `mismatch_angle` where those are not given.
     #[arg(long)]
@@ -413,6 +417,7 @@ impl RunArgs {
             mismatch: self.mismatch,
             mismatch_angle: self.mismatch_angle,
             mismatch_position: self.mismatch_position,
+            mismatch_interpolation: self.mismatch_interpolation,
             measure_mismatch: self.measure_mismatch,
             lost: self.lost,
             world: match self.world {
