@@ -457,8 +457,8 @@ pub const VARIABLES: &[Variable] = &[
          square of the interpolation error that the map's second differences imply at the \
          particle (large within a few cells of the hole, where the rim torque turns), with \
          the likelihood's normalisation; 1: as the map implies it, 0: none (e.g. a world that \
-         is the interpolated map itself). The nearest-cell lookup counts its cell's width in \
-         the position term instead",
+         is the interpolated map itself). The nearest-cell lookup counts that share of its \
+         cell's width (a step h: h^2 / 12) in the position term instead",
     ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(

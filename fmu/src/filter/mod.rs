@@ -104,10 +104,10 @@ pub struct Config {
     /// components grows by its square times their squared slope at the particle (steep near
     /// the hole, flat far from it), with the likelihood's normalisation; 0: none.
     pub mismatch_position: f64,
-    /// Share of the multilinear lookup's interpolation error, as the map's second
-    /// differences imply it, added to the variance of the force's and torque's x and y
-    /// components (with the likelihood's normalisation); 0: none. The nearest-cell lookup
-    /// counts its cell's width in the position term instead.
+    /// Share of the lookup's own error added to the variance of the force's and torque's x
+    /// and y components (with the likelihood's normalisation); 0: none. Multilinear: the
+    /// interpolation error the map's second differences imply; nearest cell: the cell's
+    /// width, as a position error in the position term.
     pub mismatch_interpolation: f64,
     /// Prior probability that the particle set has lost the truth (e.g. locked on a wrong
     /// hypothesis by a contact the map did not explain): where the measurements since the
@@ -411,7 +411,8 @@ impl Filter {
             position: match c.interpolation {
                 Interpolation::Multilinear => c.mismatch_position.powi(2),
                 Interpolation::Nearest => {
-                    c.mismatch_position.powi(2) + self.lookup.nearest_variance()
+                    c.mismatch_position.powi(2)
+                        + c.mismatch_interpolation * self.lookup.nearest_variance()
                 }
             } as f32,
             interpolation: match c.interpolation {
