@@ -13,6 +13,7 @@
 
 use std::fmt;
 
+use crate::calibration::median;
 use crate::error::Result;
 use crate::sensor::Noise;
 use crate::trial::Truth;
@@ -44,18 +45,8 @@ pub struct Scales {
 impl Scales {
     /// The scales of the misses `(along, angle)` of single presses.
     pub fn of(misses: &[(f64, f64)]) -> Self {
-        let median = |mut v: Vec<f64>| -> f64 {
-            if v.is_empty() {
-                return 0.0;
-            }
-            v.sort_by(f64::total_cmp);
-            let m = v.len() / 2;
-            if v.len() % 2 == 1 {
-                v[m]
-            } else {
-                0.5 * (v[m - 1] + v[m])
-            }
-        };
+        // No presses: no miss.
+        let median = |v: Vec<f64>| if v.is_empty() { 0.0 } else { median(v) };
         Self {
             along: (median(misses.iter().map(|m| m.0 * m.0).collect()) / MEDIAN_CHI2_1).sqrt(),
             across: median(misses.iter().map(|m| m.1).collect()) / MEDIAN_RAYLEIGH,

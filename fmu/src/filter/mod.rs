@@ -401,6 +401,16 @@ impl Filter {
         } else {
             0.0
         };
+        // The lookup's own error: the multilinear one's interpolation error per cell, or the
+        // nearest cell's width as a position error.
+        let (position, interpolation) = match c.interpolation {
+            Interpolation::Multilinear => (c.mismatch_position.powi(2), c.mismatch_interpolation),
+            Interpolation::Nearest => (
+                c.mismatch_position.powi(2)
+                    + c.mismatch_interpolation * self.lookup.nearest_variance(),
+                0.0,
+            ),
+        };
         let weights = Weights {
             meas,
             inv_var: [
@@ -408,17 +418,8 @@ impl Filter {
             ],
             axis: [f.axis, t.axis],
             along: [f.along, t.along],
-            position: match c.interpolation {
-                Interpolation::Multilinear => c.mismatch_position.powi(2),
-                Interpolation::Nearest => {
-                    c.mismatch_position.powi(2)
-                        + c.mismatch_interpolation * self.lookup.nearest_variance()
-                }
-            } as f32,
-            interpolation: match c.interpolation {
-                Interpolation::Multilinear => c.mismatch_interpolation as f32,
-                Interpolation::Nearest => 0.0,
-            },
+            position: position as f32,
+            interpolation: interpolation as f32,
             ..Weights::default()
         }
         .student(c.tail as f32);
