@@ -26,7 +26,7 @@ use ftmap::Task;
 use ftmap::mesh::Mesh;
 
 use crate::error::{HarnessError, Result};
-use crate::scene::{Face, Outline, Piece, SPHERE_RADIUS};
+use crate::scene::{Face, Outline, Piece, SPHERE_RADIUS, area};
 
 /// How far part B's pieces may stray from its mesh where part A can touch it (m).
 pub const BOUND: f64 = 1e-5;
@@ -211,17 +211,6 @@ fn contact_face(a: &Mesh, reach: f64) -> std::result::Result<(Face, Vec<Hull>), 
         pitch: PITCH.max((face_area / BED_CELLS / (3f64.sqrt() / 2.0)).sqrt()),
     };
     Ok((face, wedges))
-}
-
-/// Signed area of a closed polygon (m^2, positive counter-clockwise).
-fn area(v: &[[f64; 2]]) -> f64 {
-    (0..v.len())
-        .map(|i| {
-            let (p, q) = (v[i], v[(i + 1) % v.len()]);
-            p[0] * q[1] - q[0] * p[1]
-        })
-        .sum::<f64>()
-        / 2.0
 }
 
 /// The closed boundary loops of the triangles `faces` in the xy plane, each

@@ -27,7 +27,9 @@
 //! band still supported varies smoothly and not in steps of a whole ring. Tiny, so that
 //! the face's edge is as sharp as the CAD's: spheres of radius r round
 //! it by r and roll over part B's edges, and MuJoCo then accepts the part up to r farther
-//! off centre than the geometry does (`harness boundary` measures it). The STL meshes are
+//! off centre than the geometry does (`harness boundary` measures it). Over the bed, part
+//! A's face is a solid of convex prisms ([`Face::solid`]) lifted just clear of a face
+//! resting flat, which meets part B's edges where a tilted face rests on them. The STL meshes are
 //! visuals only (contype 0). The MJCF also loads in MuJoCo 2.2.2 (`autolimits`, no
 //! `multiccd`, Euler integrator with implicit joint damping across the approach).
 
@@ -69,6 +71,26 @@ const CELL_SAMPLES: usize = 8;
 const CELL_STIFFNESS: f64 = 4.432e6;
 /// See [`CELL_STIFFNESS`].
 const CELL_DAMPING: f64 = 4210.5;
+/// Height of part A's solid face above the bed's lowest points (m). A face resting flat on
+/// part B sinks into the bed by less (peg_in_hole: under 0.1 µm from 0.15 mm off its hole,
+/// 0.4-0.6 µm at 0.07-0.1 mm, 1.9 µm at most on the thinnest crescents), so that the bed
+/// carries it alone, by area; a face tilted by an angle a against part B's edge meets it
+/// with the solid where no sphere lies within this height / tan(a) of the edge (57 µm at
+/// 1 degree).
+pub const SOLID_LIFT: f64 = 0.000001;
+/// How far the solid face stays inside the bed's outline and outside its bore (m): part B's
+/// walls meet the bed's rings first.
+const SOLID_INSET: f64 = 0.000001;
+/// Thickness of the solid face (m).
+const SOLID_HEIGHT: f64 = 0.001;
+/// Sides of a round outline's polygon in the solid face of a part with a bore: a bore's
+/// polygon lies around it, the outline's inside it, their corners 11 µm off a 5 mm circle,
+/// where the bed's rings meet part B's edges (the face is a prism per side, and each costs
+/// MuJoCo a collision test).
+const SOLID_SIDES: usize = 48;
+/// Sides of a round disc's polygon in its solid face (one prism): within 0.7 µm of a 5 mm
+/// circle (at 96 sides, 2.7 µm, a tilted peg's rim point moved by up to 0.06 mm).
+const DISC_SIDES: usize = 192;
 /// Polygon count of a round hole's walls.
 pub const HOLE_SIDES: usize = 48;
 /// Wedges of a round peg's chamfer, its vertices on the peg's radius: the flats lie 2.7 µm
@@ -439,9 +461,110 @@ impl Face {
             })
             .collect()
     }
+
+    /// The face as a solid, in convex prisms (vertices in the task frame): the flat within
+    /// the bed's outline and outside its bore by [`SOLID_INSET`], from [`SOLID_LIFT`] above
+    /// the bed's lowest points up by [`SOLID_HEIGHT`]. The bed carries a face resting flat,
+    /// by area; the solid meets part B's edges where a tilted face rests on them, at the
+    /// edge itself and not at the nearest sphere of the bed's lattice (the bed alone put a
+    /// tilted peg's rim contact 0.1-0.6 mm off the geometry's).
+    ///
+    /// # Errors
+    /// When the flat's outline (and bore) cannot be triangulated.
+    pub fn solid(&self) -> std::result::Result<Vec<Piece>, String> {
+        let (z0, z1) = (SOLID_LIFT, SOLID_LIFT + SOLID_HEIGHT);
+        // A disc is one piece (MuJoCo's cylinder chattered between a tilted peg's two rim
+        // points and never settled); a face with a bore is many.
+        let sides = if self.inner.is_none() {
+            DISC_SIDES
+        } else {
+            SOLID_SIDES
+        };
+        // A round outline as a polygon inside it; a round bore as one around it.
+        let polygon_of = |outline: &Outline, offset: f64, around: bool| match outline {
+            Outline::Circle(r) => {
+                let k = if around {
+                    1.0 / (PI / sides as f64).cos()
+                } else {
+                    1.0
+                };
+                polygon((r + offset) * k, sides, 0.0)
+            }
+            _ => outline.corners(offset),
+        };
+        let mut points = polygon_of(&self.outer, -self.chamfer - SOLID_INSET, false);
+        let holes: Vec<u32> = match &self.inner {
+            Some(inner) => {
+                let start = points.len() as u32;
+                points.extend(polygon_of(inner, SOLID_INSET, true));
+                vec![start]
+            }
+            None => Vec::new(),
+        };
+        let mut flat: Vec<u32> = Vec::new();
+        earcut::Earcut::new().earcut(points.iter().copied(), &holes, &mut flat);
+        let signed = |t: &[u32]| {
+            let [a, b, c] = [0, 1, 2].map(|k| points[t[k] as usize]);
+            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        };
+        let covered: f64 = flat.chunks(3).map(|t| signed(t).abs() / 2.0).sum();
+        let split = holes.first().map_or(points.len(), |&h| h as usize);
+        let area = area(&points[..split]).abs() - area(&points[split..]).abs();
+        if flat.is_empty() || (covered - area).abs() > 1e-6 * area {
+            return Err(format!(
+                "part A's contact face ({:.3} mm^2) does not triangulate ({:.3} mm^2 covered): its outline or bore crosses itself",
+                area * 1e6,
+                covered * 1e6
+            ));
+        }
+        // Counter-clockwise triangles, merged into convex polygons.
+        let triangles: Vec<[u32; 3]> = flat
+            .chunks(3)
+            .map(|t| {
+                if signed(t) > 0.0 {
+                    [t[0], t[1], t[2]]
+                } else {
+                    [t[0], t[2], t[1]]
+                }
+            })
+            .collect();
+        let vertices: Vec<nalgebra::Point2<f64>> = points
+            .iter()
+            .map(|q| nalgebra::Point2::new(q[0], q[1]))
+            .collect();
+        Ok(
+            parry2d_f64::transformation::hertel_mehlhorn_idx(&vertices, &triangles)
+                .into_iter()
+                .map(|poly| Piece::Hull {
+                    center: [0.0; 3],
+                    vertices: [z0, z1]
+                        .into_iter()
+                        .flat_map(|z| {
+                            poly.iter()
+                                .map(|&i| points[i as usize])
+                                .map(move |q| [q[0], q[1], z])
+                                .collect::<Vec<_>>()
+                        })
+                        .collect(),
+                })
+                .collect(),
+        )
+    }
 }
 
-/// A convex collision piece of part B, in the goal frame (m).
+/// Signed area of a closed polygon (m^2, positive counter-clockwise).
+pub(crate) fn area(v: &[[f64; 2]]) -> f64 {
+    (0..v.len())
+        .map(|i| {
+            let (p, q) = (v[i], v[(i + 1) % v.len()]);
+            p[0] * q[1] - q[0] * p[1]
+        })
+        .sum::<f64>()
+        / 2.0
+}
+
+/// A convex collision piece: part B's, in the goal frame, or part A's solid face, in the
+/// task frame (m).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Piece {
     /// An axis-aligned box: centre and half sizes.
@@ -469,6 +592,35 @@ pub enum Piece {
     },
 }
 
+impl Piece {
+    /// The piece's MJCF `<geom>` line (indented for part B's body), named `name` (a hull's
+    /// mesh asset has that name too).
+    fn geom(&self, name: &str, rgba: &str, extra: &str, f: impl Fn(f64) -> String) -> String {
+        let v3 = |v: [f64; 3]| format!("{} {} {}", f(v[0]), f(v[1]), f(v[2]));
+        let (kind, at, size) = match self {
+            Self::Box { center, half } => (
+                "type=\"box\"".into(),
+                *center,
+                format!(" size=\"{}\"", v3(*half)),
+            ),
+            Self::Hull { center, .. } => (
+                format!("type=\"mesh\" mesh=\"{name}\""),
+                *center,
+                String::new(),
+            ),
+            Self::Cylinder { radius, z0, z1 } => (
+                "type=\"cylinder\"".into(),
+                [0.0, 0.0, (z0 + z1) / 2.0],
+                format!(" size=\"{} {}\"", f(*radius), f((z1 - z0) / 2.0)),
+            ),
+        };
+        format!(
+            "      <geom name=\"{name}\" {kind} pos=\"{}\"{size} rgba=\"{rgba}\"{extra}/>",
+            v3(at)
+        )
+    }
+}
+
 /// Everything a task's scene is generated from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneSpec {
@@ -484,6 +636,8 @@ pub struct SceneSpec {
     pub face: Face,
     /// Part A's convex collision hulls besides the bed (chamfers, steps), task frame.
     pub wedges: Vec<Vec<[f64; 3]>>,
+    /// Part A's contact face as a solid ([`Face::solid`]), task frame.
+    pub solid: Vec<Piece>,
     /// Part B's collision pieces.
     pub pieces: Vec<Piece>,
     /// How far part B's pieces stray from its mesh where part A can touch it (m), when
@@ -515,6 +669,14 @@ fn polygon(r: f64, n: usize, phase: f64) -> Vec<[f64; 2]> {
             [r * t.cos(), r * t.sin()]
         })
         .collect()
+}
+
+/// [`Face::solid`], its error named.
+fn solid_of(face: &Face) -> Result<Vec<Piece>> {
+    face.solid().map_err(|reason| HarnessError::Invalid {
+        what: "part A's solid face",
+        reason,
+    })
 }
 
 /// Half height of part B's pieces whose tops are at `top` (m): the power of two at or
@@ -746,6 +908,7 @@ impl SceneSpec {
             mesh_scale: [1.0; 2],
             deviation: None,
             wedges: face.wedges(),
+            solid: solid_of(&face)?,
             face,
             pieces,
             top,
@@ -774,6 +937,7 @@ impl SceneSpec {
             mesh_a: file(&task.part_a.mesh),
             mesh_b: file(&task.part_b.mesh),
             mesh_scale: [&task.part_a, &task.part_b].map(|p| p.units.metres()),
+            solid: solid_of(&parts.face)?,
             face: parts.face,
             wedges: parts.wedges,
             pieces: parts.pieces,
@@ -855,9 +1019,11 @@ impl SceneSpec {
             let v: Vec<String> = vertices.iter().map(|&q| v3(q)).collect();
             format!("    <mesh name=\"{name}\" vertex=\"{}\"/>", v.join("  "))
         };
-        for (i, p) in self.pieces.iter().enumerate() {
-            if let Piece::Hull { vertices, .. } = p {
-                let _ = writeln!(x, "{}", hull(format!("piece{i}"), vertices));
+        for (pieces, name) in [(&self.pieces, "piece"), (&self.solid, "solid")] {
+            for (i, p) in pieces.iter().enumerate() {
+                if let Piece::Hull { vertices, .. } = p {
+                    let _ = writeln!(x, "{}", hull(format!("{name}{i}"), vertices));
+                }
             }
         }
         for (i, w) in wedges.iter().enumerate() {
@@ -901,28 +1067,11 @@ impl SceneSpec {
             "      <geom name=\"visual_b\" class=\"visual\" type=\"mesh\" mesh=\"visual_b\" rgba=\"0.45 0.5 0.6 {alpha_b}\"/>"
         );
         for (i, p) in self.pieces.iter().enumerate() {
-            let _ = match p {
-                Piece::Box { center, half } => {
-                    writeln!(
-                        x,
-                        "      <geom name=\"piece{i}\" type=\"box\" pos=\"{}\" size=\"{}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>",
-                        v3(*center),
-                        v3(*half)
-                    )
-                }
-                Piece::Hull { center, .. } => writeln!(
-                    x,
-                    "      <geom name=\"piece{i}\" type=\"mesh\" mesh=\"piece{i}\" pos=\"{}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>",
-                    v3(*center)
-                ),
-                Piece::Cylinder { radius, z0, z1 } => writeln!(
-                    x,
-                    "      <geom name=\"piece{i}\" type=\"cylinder\" pos=\"0 0 {}\" size=\"{} {}\" rgba=\"0.45 0.5 0.6 1\"{hidden}/>",
-                    f((z0 + z1) / 2.0),
-                    f(*radius),
-                    f((z1 - z0) / 2.0)
-                ),
-            };
+            let _ = writeln!(
+                x,
+                "{}",
+                p.geom(&format!("piece{i}"), "0.45 0.5 0.6 1", hidden, f)
+            );
         }
         let _ = writeln!(x, "    </body>");
         let start = self.top + APPROACH_CLEARANCE;
@@ -998,6 +1147,13 @@ impl SceneSpec {
             let _ = writeln!(
                 x,
                 "        <geom name=\"chamfer{i}\" type=\"mesh\" mesh=\"chamfer{i}\" rgba=\"0.8 0.3 0.2 1\"{hidden}/>"
+            );
+        }
+        for (i, p) in self.solid.iter().enumerate() {
+            let _ = writeln!(
+                x,
+                "  {}",
+                p.geom(&format!("solid{i}"), "0.8 0.3 0.2 1", hidden, f)
             );
         }
         let _ = writeln!(
@@ -1137,5 +1293,68 @@ pub fn check_scenes(tasks: &[Task]) -> Result<()> {
         Ok(())
     } else {
         Err(HarnessError::ScenesStale { paths })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_solid_face_covers_its_flat_from_just_inside_it_in_convex_prisms() {
+        for task in &tasks_with_scenes().expect("the committed tasks") {
+            let spec = SceneSpec::of_task(task).expect("its scene description");
+            let face = &spec.face;
+            let mut covered = 0.0;
+            for piece in &spec.solid {
+                let bottom: Vec<[f64; 2]> = match piece {
+                    Piece::Hull { vertices, .. } => vertices
+                        .iter()
+                        .filter(|v| v[2] == SOLID_LIFT)
+                        .map(|v| [v[0], v[1]])
+                        .collect(),
+                    other => panic!("{}: {other:?}", task.name),
+                };
+                let n = bottom.len();
+                let turns = (0..n).map(|i| {
+                    let [a, b, c] = [bottom[i], bottom[(i + 1) % n], bottom[(i + 2) % n]];
+                    (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0])
+                });
+                assert!(
+                    turns.clone().all(|t| t >= -1e-18),
+                    "{}: not convex",
+                    task.name
+                );
+                for q in &bottom {
+                    let depth = face.depth(*q);
+                    assert!(
+                        (0.99 * SOLID_INSET..).contains(&depth),
+                        "{}: a corner {depth} m inside the flat",
+                        task.name
+                    );
+                }
+                covered += area(&bottom).abs();
+            }
+            // The flat's area, counted on a 20 µm grid by the bed's own test of the flat.
+            let h = 2e-5;
+            let reach = face
+                .outer
+                .corners(0.0)
+                .iter()
+                .map(|q| q[0].hypot(q[1]))
+                .fold(0.0, f64::max);
+            let k = (reach / h).ceil() as i64;
+            let flat = (-k..=k)
+                .flat_map(|i| (-k..=k).map(move |j| [i as f64 * h, j as f64 * h]))
+                .filter(|&q| face.depth(q) >= 0.0)
+                .count() as f64
+                * h
+                * h;
+            assert!(
+                (covered - flat).abs() < 0.01 * flat,
+                "{}: the solid covers {covered} m^2 of a {flat} m^2 flat",
+                task.name
+            );
+        }
     }
 }

@@ -286,3 +286,85 @@ fn a_wrist_holds_a_flat_contact_as_stiffly_as_the_map_assumes() {
         );
     }
 }
+
+/// Where a flat face of radius `peg` (m), tilted down towards +x, rests on the rim of part
+/// B's hole (a polygon of `sides` flats on `hole`, turned by half a side, centred `d` along
+/// +x): the point of part B's top under the face (the disc less the hole) farthest along +x,
+/// sampled along the face's edge every 0.2 µm. Its x, from the face's centre (m).
+fn rim_point(peg: f64, hole: f64, sides: usize, d: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let corner = hole / (PI / sides as f64).cos();
+    let vertex = |i: usize| {
+        let t = PI / sides as f64 + TAU * i as f64 / sides as f64;
+        [d + corner * t.cos(), corner * t.sin()]
+    };
+    let in_hole = |q: [f64; 2]| {
+        (0..sides).all(|i| {
+            let (a, b) = (vertex(i), vertex(i + 1));
+            (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0]) >= 0.0
+        })
+    };
+    let n = (TAU * peg / 2e-7) as usize;
+    (0..n)
+        .map(|k| {
+            let t = TAU * k as f64 / n as f64;
+            [peg * t.cos(), peg * t.sin()]
+        })
+        .filter(|&q| !in_hole(q))
+        .map(|q| q[0])
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+#[test]
+fn a_tilted_peg_on_the_rim_reads_the_lever_of_the_rim_point_the_geometry_gives() {
+    // The tilt probe: part A tilted towards the hole rests on the rim at the ends of the
+    // crescent of part B's top that its face covers, and that point moves with the offset
+    // (2.4 mm per mm at 1 degree, 0.3-1.3 mm off), where an upright face's lever barely
+    // does. The bed of spheres alone put it at the nearest sphere of its 0.5 mm lattice,
+    // 0.1-0.6 mm off; the solid face puts it within 0.03 mm of the geometry from 0.3 mm
+    // off (0.25 mm at 0.2 mm off and 0.5 degrees, where the rim point moves 6.7 mm per mm
+    // and a sphere of the bed within 0.11 mm of it meets the rim first).
+    let (task, mut sim) = common::tilted();
+    let ftmap::task::cad::Geometry::RoundPeg {
+        peg_radius,
+        hole_radius,
+        ..
+    } = *task.geometry().expect("a [geometry] table")
+    else {
+        panic!("peg_in_hole is a round peg");
+    };
+    let (height, top) = (task.contact.sensor_origin[2], sim.spec().top);
+    for degrees in [0.5f64, 1.0, 2.0] {
+        let tilt = degrees.to_radians();
+        // A tool tilted by `tilt` meets the goal's height `top * tan(tilt)` off its face.
+        let lean = top * tilt.tan();
+        let mut last = f64::NEG_INFINITY;
+        for off in [0.3e-3, 0.45e-3, 0.65e-3, 1.0e-3, 1.5e-3, 2.5e-3] {
+            sim.set_object([lean + off, 0.0]);
+            sim.set_object_rotation([0.0; 3]).expect("part B level");
+            sim.set_tcp_rotation([0.0, tilt, 0.0])
+                .expect("the wrist tilts");
+            let c = sim.contact_motion([0.0, 0.0]);
+            assert!(
+                c.settled && !c.inserted,
+                "{degrees} degrees, {off} m: {c:?}"
+            );
+            let w = about_the_face(map_wrench(c.raw), height);
+            let lever = -w[4] / w[2];
+            let d = lean + off - c.tcp[0];
+            let expected = rim_point(peg_radius, hole_radius, harness::scene::HOLE_SIDES, d);
+            assert!(
+                (lever - expected).abs() < 5e-5,
+                "{degrees} degrees, {:.3} mm off: the rim point at {:.3} mm, MuJoCo's lever {:.3} mm",
+                d * 1e3,
+                expected * 1e3,
+                lever * 1e3
+            );
+            assert!(
+                lever > last,
+                "the lever grows with the offset: {lever} after {last}"
+            );
+            last = lever;
+        }
+    }
+}

@@ -65,7 +65,11 @@ pub fn chamfered(name: &str, peg: f64, hole: f64) -> (Task, Sim) {
 pub fn tilted() -> (Task, Sim) {
     let committed = Task::find("peg_in_hole").expect("a committed task");
     let text = std::fs::read_to_string(&committed.path).expect("its task file");
-    let dir = std::env::temp_dir().join(format!("tilted-{}", std::process::id()));
+    // A folder per call: tests run in parallel, and one rewriting the task file another
+    // reads made it read an empty file.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("tilted-{}-{call}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a scratch folder");
     let path = dir.join("task.toml");
     let tilted = text
