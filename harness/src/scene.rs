@@ -77,7 +77,7 @@ const CELL_DAMPING: f64 = 4210.5;
 /// carries it alone, by area; a face tilted by an angle a against part B's edge meets it
 /// with the solid where no sphere lies within this height / tan(a) of the edge (57 µm at
 /// 1 degree).
-pub const SOLID_LIFT: f64 = 0.000001;
+const SOLID_LIFT: f64 = 0.000001;
 /// How far the solid face stays inside the bed's outline and outside its bore (m): part B's
 /// walls meet the bed's rings first.
 const SOLID_INSET: f64 = 0.000001;

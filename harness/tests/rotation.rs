@@ -319,8 +319,8 @@ fn rim_point(peg: f64, hole: f64, sides: usize, d: f64) -> f64 {
 fn a_tilted_peg_on_the_rim_reads_the_lever_of_the_rim_point_the_geometry_gives() {
     // The tilt probe: part A tilted towards the hole rests on the rim at the ends of the
     // crescent of part B's top that its face covers, and that point moves with the offset
-    // (2.4 mm per mm at 1 degree, 0.3-1.3 mm off), where an upright face's lever barely
-    // does. The bed of spheres alone put it at the nearest sphere of its 0.5 mm lattice,
+    // (1.2 mm per mm on average from 0.3 to 1.3 mm off), where an upright face's lever
+    // barely does. The bed of spheres alone put it at the nearest sphere of its 0.5 mm lattice,
     // 0.1-0.6 mm off; the solid face puts it within 0.03 mm of the geometry from 0.3 mm
     // off (0.25 mm at 0.2 mm off and 0.5 degrees, where the rim point moves 6.7 mm per mm
     // and a sphere of the bed within 0.11 mm of it meets the rim first).

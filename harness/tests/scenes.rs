@@ -49,8 +49,9 @@ fn a_face_resting_on_part_b_loads_its_lattice_alike_and_its_rings_less() {
         let total: f64 = loads.iter().map(|&(f, _)| f).sum();
         let lattice = loads.iter().filter(|l| l.1 == cell).count();
         assert!(lattice > 20, "{}: {lattice} lattice contacts", task.name);
-        // Part A's solid face (and part B's pieces: MuJoCo's positive solref) carries none
-        // of a face resting flat: it sits clear of the bed.
+        // Part A's solid face carries none of a face resting flat: it sits clear of the bed.
+        // (Its contacts have the pieces' positive solref; the spheres' take their own,
+        // negative, by priority.)
         let solid: f64 = loads.iter().filter(|l| l.1 < 0.0).map(|l| l.0).sum();
         assert!(
             solid == 0.0,
