@@ -503,11 +503,8 @@ impl Face {
         };
         let mut flat: Vec<u32> = Vec::new();
         earcut::Earcut::new().earcut(points.iter().copied(), &holes, &mut flat);
-        let signed = |t: &[u32]| {
-            let [a, b, c] = [0, 1, 2].map(|k| points[t[k] as usize]);
-            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-        };
-        let covered: f64 = flat.chunks(3).map(|t| signed(t).abs() / 2.0).sum();
+        let signed = |t: &[u32]| area(&[0, 1, 2].map(|k| points[t[k] as usize]));
+        let covered: f64 = flat.chunks(3).map(|t| signed(t).abs()).sum();
         let split = holes.first().map_or(points.len(), |&h| h as usize);
         let area = area(&points[..split]).abs() - area(&points[split..]).abs();
         if flat.is_empty() || (covered - area).abs() > 1e-6 * area {
@@ -1316,15 +1313,11 @@ mod tests {
                     other => panic!("{}: {other:?}", task.name),
                 };
                 let n = bottom.len();
-                let turns = (0..n).map(|i| {
+                let mut turns = (0..n).map(|i| {
                     let [a, b, c] = [bottom[i], bottom[(i + 1) % n], bottom[(i + 2) % n]];
                     (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0])
                 });
-                assert!(
-                    turns.clone().all(|t| t >= -1e-18),
-                    "{}: not convex",
-                    task.name
-                );
+                assert!(turns.all(|t| t >= -1e-18), "{}: not convex", task.name);
                 for q in &bottom {
                     let depth = face.depth(*q);
                     assert!(

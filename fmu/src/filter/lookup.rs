@@ -196,7 +196,7 @@ pub struct Weights {
     pub position: f32,
     /// Share of the lookup's interpolation-error variance ([`interpolation_errors`]) that
     /// counts: the `mismatch_interpolation` parameter for the multilinear lookup, 0 for the
-    /// nearest cell (whose error, the cell's width, that share of it is in `position`).
+    /// nearest cell (whose error, that share of the cell's width, is in `position`).
     pub interpolation: f32,
     /// Degrees of freedom of a Student-t likelihood over the channels used; 0: Gaussian.
     pub tail: f32,
