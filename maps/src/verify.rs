@@ -32,7 +32,7 @@ const MAX_RAYS: f64 = 40_000.0;
 const MAX_FINE_RAYS: f64 = 200_000.0;
 /// The first scan's centroid is taken as it is when its sampling error (estimated from its
 /// rays on the region's edge) is below this share of the pixel the map is held to.
-const SAMPLING_SHARE: f64 = 0.2;
+const SAMPLING_SHARE: f64 = 0.05;
 /// Rays in a row that a finer search looks past the region's last touching ray: the tips
 /// of a crescent thinner than its pitch touch only now and then along it.
 const REACH: u32 = 3;
@@ -65,6 +65,10 @@ pub struct CellCheck {
     pub coords: Vec<f64>,
     /// Map depth minus the exact contact height (m).
     pub depth_error: f64,
+    /// How far the map's depth may miss beyond the contact tolerance where the parts are
+    /// tilted against each other (m): a pixel times the tilt's tangent, since the z-buffer
+    /// samples the face that rests on an edge up to a pixel from that edge.
+    pub sampling: f64,
     /// Distance across the approach from the map's lever point to the exact contact
     /// region's centroid (m): infinite where no ray along the approach sees the contact;
     /// `None` where the map's model does not put the lever at the centroid.
@@ -83,12 +87,13 @@ pub struct Verification {
 }
 
 impl Verification {
-    /// Share of the cells whose depth is within the contact tolerance.
+    /// Share of the cells whose depth is within the contact tolerance (plus its sampling
+    /// allowance on tilted parts).
     pub fn depth_share(&self) -> f64 {
         let within = self
             .checks
             .iter()
-            .filter(|c| c.depth_error.abs() <= self.tolerance);
+            .filter(|c| c.depth_error.abs() <= self.tolerance + c.sampling);
         within.count() as f64 / self.checks.len().max(1) as f64
     }
 
@@ -120,7 +125,8 @@ impl Verification {
     /// error over the pixel, each in its own bound's units), worst first.
     pub fn worst(&self, n: usize) -> Vec<&CellCheck> {
         let excess = |c: &CellCheck| {
-            (c.depth_error.abs() / self.tolerance).max(c.centroid_error.unwrap_or(0.0) / self.pixel)
+            (c.depth_error.abs() / (self.tolerance + c.sampling))
+                .max(c.centroid_error.unwrap_or(0.0) / self.pixel)
         };
         let mut all: Vec<&CellCheck> = self.checks.iter().collect();
         all.sort_by(|a, b| excess(b).total_cmp(&excess(a)));
@@ -279,10 +285,14 @@ impl<'a> Parts<'a> {
             let lever = view.project(&Point3::from(nearest + force * along));
             (lever[0] - centroid[0]).hypot(lever[1] - centroid[1])
         });
+        // Part B's face turned against part A's (both across the approach at rest).
+        let approach = Vector3::from(self.task.contact.approach);
+        let tilt = (r2 * approach).angle(&approach);
         Ok(CellCheck {
             cell,
             coords,
             depth_error,
+            sampling: map.meta().pixel * tilt.tan(),
             centroid_error,
         })
     }
