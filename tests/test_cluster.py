@@ -58,7 +58,7 @@ def test_a_sharded_map_merges_into_the_single_machine_map(scheduler, tmp_path):
     merged = tmp_path / "merged.ftmap"
     cluster(scheduler, "map", "--task", str(task), "--shards", "4", "--out", str(merged))
     a, b = FtMap(whole.read_bytes()), FtMap(merged.read_bytes())
-    assert a.values.shape == b.values.shape == (11, 11, 3, 7)
+    assert a.values.shape == b.values.shape == (21, 21, 3, 7)
     np.testing.assert_array_equal(a.values, b.values)
 
 

@@ -116,8 +116,9 @@ pub fn generate(
 
 /// Revision of what a computed map holds, part of the cache key: raise it when a change
 /// to the generator changes the maps (2: the clearance in the metadata; 3: the symmetry;
-/// 4: thin contact regions at a finer pixel; 5: thin by mean width too).
-const MAP_REVISION: u32 = 5;
+/// 4: thin contact regions at a finer pixel; 5: thin by mean width too; 6: the object's
+/// translations out to `omega.reach`).
+const MAP_REVISION: u32 = 6;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and

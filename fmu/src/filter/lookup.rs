@@ -49,6 +49,10 @@ pub struct MapAxis {
     /// Period in grid units where the axis wraps around (`object.rz` of a map with an
     /// n-fold symmetry about the approach: 2 pi / n, the whole axis).
     pub period: Option<f32>,
+    /// Omega's bounds in grid units, where the particles' poses live: the whole axis, or
+    /// its middle on an axis that samples relative poses farther
+    /// ([`ftmap::GridAxis::omega`]).
+    pub omega: [f32; 2],
 }
 
 impl MapAxis {
@@ -82,24 +86,29 @@ impl MapAxis {
     }
 
     /// Grid coordinate `u` of a particle moved by its jitter, brought back into Omega:
-    /// wrapped on a periodic axis, mirrored at the bounds on another (a clamp would pile
-    /// the particles that cross a bound onto it, a point mass that the uniform prior does
-    /// not hold and that reads as a narrow spread at the bound).
+    /// wrapped on a periodic axis, mirrored at Omega's bounds on another (a clamp would
+    /// pile the particles that cross a bound onto it, a point mass that the uniform prior
+    /// does not hold and that reads as a narrow spread at the bound).
     #[inline(always)]
     pub fn reflect(&self, u: f32) -> f32 {
         if self.period.is_some() {
             return self.fold(u);
         }
-        let top = self.top();
-        let mirrored = if u < 0.0 {
-            -u
-        } else if u > top {
-            2.0 * top - u
+        let [lo, hi] = self.omega;
+        let mirrored = if u < lo {
+            2.0 * lo - u
+        } else if u > hi {
+            2.0 * hi - u
         } else {
             u
         };
-        // A step longer than the axis itself crosses both bounds: the clamp ends it.
-        mirrored.clamp(0.0, top)
+        // A step longer than Omega itself crosses both bounds: the clamp ends it.
+        mirrored.clamp(lo, hi)
+    }
+
+    /// Whether grid coordinate `u` lies in Omega.
+    pub fn in_omega(&self, u: f32) -> bool {
+        (self.omega[0]..=self.omega[1]).contains(&u)
     }
 
     /// The difference `d` of two grid coordinates, the shortest way round on a periodic axis.
@@ -740,6 +749,9 @@ fn axes_of(map: &FtMap) -> Vec<MapAxis> {
                 .then_some(a.dof.axis.index()),
             period: (a.dof == Dof::new(Pose::Object, Axis::Rz) && symmetry.is_some())
                 .then(|| (a.count - 1) as f32),
+            omega: a
+                .omega_bounds()
+                .map(|x| (((x - a.min) / a.step) as f32).clamp(0.0, (a.count - 1) as f32)),
         })
         .collect()
 }
@@ -1056,38 +1068,48 @@ mod tests {
     }
 
     #[test]
-    fn jitter_mirrored_at_the_bounds_keeps_a_uniform_set_uniform() {
+    fn jitter_mirrored_at_omega_s_bounds_keeps_a_uniform_set_uniform() {
         use rand_xoshiro::Xoshiro256PlusPlus;
         use rand_xoshiro::rand_core::SeedableRng;
+        // Omega the middle half of an axis that samples relative poses twice as far.
         let axis = MapAxis {
-            dof: Dof::new(Pose::Grip, Axis::X),
-            min: -0.002,
+            dof: Dof::new(Pose::Object, Axis::X),
+            min: -0.004,
             step: 1e-4,
-            count: 41,
+            count: 81,
             stride: 1,
-            tcp: None,
+            tcp: Some(0),
             period: None,
+            omega: [20.0, 60.0],
         };
-        let (n, top) = (40_000, axis.top());
-        let mut v: Vec<f32> = (0..n).map(|i| top * (i as f32 + 0.5) / n as f32).collect();
+        let [lo, hi] = axis.omega;
+        let (n, width) = (40_000, hi - lo);
+        let mut v: Vec<f32> = (0..n)
+            .map(|i| lo + width * (i as f32 + 0.5) / n as f32)
+            .collect();
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
         for _ in 0..200 {
-            crate::filter::noise::jitter(&mut rng, &mut v, 0.1 * top, |u| axis.reflect(u));
+            crate::filter::noise::jitter(&mut rng, &mut v, 0.1 * width, |u| axis.reflect(u));
         }
-        // A flat likelihood: the walk's stationary set is the uniform prior, with no mass
-        // piled on a bound (a clamp puts a few per cent on each).
-        let at_bounds = v.iter().filter(|&&u| u == 0.0 || u == top).count();
+        // A flat likelihood: the walk's stationary set is the uniform prior over Omega, with
+        // no mass piled on a bound (a clamp puts a few per cent on each) and none beyond.
+        assert!(v.iter().all(|&u| axis.in_omega(u)), "a particle left Omega");
+        let at_bounds = v.iter().filter(|&&u| u == lo || u == hi).count();
         assert!(at_bounds < 10, "{at_bounds} particles on a bound");
         let mut bins = [0usize; 10];
         for &u in &v {
-            bins[((u / top * 10.0) as usize).min(9)] += 1;
+            bins[(((u - lo) / width * 10.0) as usize).min(9)] += 1;
         }
         for (b, &c) in bins.iter().enumerate() {
             let share = c as f64 / n as f64;
             assert!((share - 0.1).abs() < 0.01, "bin {b} holds {share}");
         }
-        assert_eq!(axis.reflect(-1.5), 1.5);
-        assert_eq!(axis.reflect(top + 2.0), top - 2.0);
-        assert_eq!(axis.reflect(3.0 * top), 0.0, "past both bounds: clamped");
+        assert_eq!(axis.reflect(lo - 1.5), lo + 1.5);
+        assert_eq!(axis.reflect(hi + 2.0), hi - 2.0);
+        assert_eq!(
+            axis.reflect(hi + 3.0 * width),
+            lo,
+            "past both bounds: clamped"
+        );
     }
 }

@@ -311,7 +311,8 @@ impl Filter {
         let n = pos.len() / lookup.ndim().max(1);
         for (k, a) in lookup.axes().iter().enumerate() {
             let u: f32 = unit(rng);
-            pos[k * n + i] = u * a.top();
+            let [lo, hi] = a.omega;
+            pos[k * n + i] = lo + u * (hi - lo);
         }
     }
 

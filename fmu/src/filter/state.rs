@@ -158,12 +158,9 @@ impl Filter {
         }
         let rng: Xoshiro256PlusPlus = serde_json::from_slice(r.bytes()?)
             .map_err(|e| FusionError::State(format!("random generator state: {e}")))?;
-        // Particles live on Omega's grid: coordinates in [0, top] (grid units) per axis.
+        // Particles live in Omega: coordinates within its bounds (grid units) per axis.
         for (k, a) in self.lookup.axes().iter().enumerate() {
-            if let Some(v) = pos[k * n..(k + 1) * n]
-                .iter()
-                .find(|v| !(0.0..=a.top()).contains(*v))
-            {
+            if let Some(v) = pos[k * n..(k + 1) * n].iter().find(|v| !a.in_omega(**v)) {
                 return Err(FusionError::State(format!(
                     "a particle's {} coordinate is {v} grid steps, outside Omega",
                     a.dof

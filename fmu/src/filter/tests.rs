@@ -9,7 +9,7 @@ use rand_xoshiro::rand_core::SeedableRng;
 
 use super::state::{Reader, Writer};
 use super::*;
-use ftfusion_testkit::{HOLE_DEPTH, field, peg_map};
+use ftfusion_testkit::{HOLE_DEPTH, field, peg_map, peg_map_reaching};
 
 const STEP: f64 = 2.5e-4;
 
@@ -501,6 +501,84 @@ fn the_uniform_start_covers_omega_and_is_not_converged() {
             lo >= -5e-3 - 1e-12 && hi <= 5e-3 + 1e-12 && lo < -4.9e-3 && hi > 4.9e-3,
             "{lo} {hi}"
         );
+    }
+}
+
+/// A filter of 4000 particles over Omega +-5 mm on the analytic map sampled out to
+/// `reach` times that, after `contacts` contacts at TCP `tcp` (m) with part B at `truth`.
+fn after_contacts(
+    reach: f64,
+    seed: u64,
+    truth: [f64; 2],
+    tcp: [f64; 2],
+    contacts: usize,
+) -> Filter {
+    let map = peg_map_reaching(5e-3, reach, STEP, None).expect("map");
+    let cfg = Config {
+        seed,
+        particles: 4000,
+        ..Config::default()
+    };
+    let mut f = Filter::new(&map, Path::new("synthetic"), cfg).expect("filter");
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    for _ in 0..contacts {
+        f.measure(&measurement(truth[0], truth[1], tcp, 0.002, &mut rng))
+            .expect("finite");
+    }
+    f
+}
+
+/// The particles' least and greatest value on each axis (m).
+fn bounds(f: &Filter) -> [[f64; 2]; 2] {
+    std::array::from_fn(|k| {
+        (0..f.config().particles)
+            .map(|i| f.particle(i, k))
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], x| {
+                [a.min(x), b.max(x)]
+            })
+    })
+}
+
+#[test]
+fn a_contact_far_from_the_truth_reads_the_truth_where_the_map_reaches_it() {
+    // Part B 4 mm off, the TCP 7.6 mm from it on the other side of Omega: the field's lever
+    // there is 0.48 mm. A map sampling Omega alone reads the truth at its edge 5 mm off (a
+    // 1.65 mm lever) and puts the estimate mm away; the map reaching twice Omega reads it
+    // where it is. The particles stay in Omega either way. Measured on seeds 1-6: 4.3-5.8
+    // mm off with the map of Omega, 0.24-1.29 mm (NEES at most 2.2) with the reaching one.
+    let (truth, tcp) = ([4e-3, 0.5e-3], [-3.6e-3, 0.3e-3]);
+    for b in bounds(&after_contacts(2.0, 1, truth, tcp, 0)) {
+        assert!(
+            b[0] >= -5e-3 && b[0] < -4.9e-3 && b[1] <= 5e-3 && b[1] > 4.9e-3,
+            "start {b:?}"
+        );
+    }
+    for seed in 1..=6 {
+        for reach in [1.0, 2.0] {
+            let f = after_contacts(reach, seed, truth, tcp, 1);
+            for b in bounds(&f) {
+                assert!(
+                    b[0] >= -5e-3 && b[1] <= 5e-3,
+                    "reach {reach}: a particle left Omega: {b:?}"
+                );
+            }
+            let e = f.estimate();
+            let nees: f64 = (0..2)
+                .map(|k| ((e.pose[k] - truth[k]) / e.std[k]).powi(2))
+                .sum();
+            let off = error(&f, truth);
+            if reach > 1.0 {
+                assert!(
+                    off < 2e-3 && nees < 6.0,
+                    "seed {seed}: {off} m off, NEES {nees}"
+                );
+            } else {
+                assert!(
+                    off > 3e-3,
+                    "seed {seed}: the map of Omega alone {off} m off"
+                );
+            }
+        }
     }
 }
 

@@ -50,11 +50,25 @@ pub fn synthetic_meta(task: &str) -> MapMeta {
 /// The field sampled on object.x, object.y in +-`size` at `step` (m), and when `rot` is
 /// `Some((size, step))` also on object.rx, object.ry (rad).
 pub fn peg_map(size: f64, step: f64, rot: Option<(f64, f64)>) -> ftmap::Result<FtMap> {
+    peg_map_reaching(size, 1.0, step, rot)
+}
+
+/// As [`peg_map`] over an Omega of +-`size` whose object.x, object.y the map samples out to
+/// `reach` times `size` (a task's `[omega] reach`).
+pub fn peg_map_reaching(
+    size: f64,
+    reach: f64,
+    step: f64,
+    rot: Option<(f64, f64)>,
+) -> ftmap::Result<FtMap> {
     let dof = |a| Dof::new(Pose::Object, a);
-    let mut axes = vec![
-        GridAxis::symmetric(dof(Axis::X), size, step)?,
-        GridAxis::symmetric(dof(Axis::Y), size, step)?,
-    ];
+    let translation = |a| {
+        GridAxis::symmetric(dof(a), size * reach, step).map(|g| GridAxis {
+            omega: (reach > 1.0).then_some(size),
+            ..g
+        })
+    };
+    let mut axes = vec![translation(Axis::X)?, translation(Axis::Y)?];
     if let Some((s, d)) = rot {
         axes.push(GridAxis::symmetric(dof(Axis::Rx), s, d)?);
         axes.push(GridAxis::symmetric(dof(Axis::Ry), s, d)?);

@@ -46,6 +46,8 @@ pub fn centre_task(task: &Task, grid: &Grid, clearance: Option<f64>) -> Result<O
     let mut centre = task.clone();
     centre.omega.delta_trans = step;
     centre.omega.size_trans = (CENTRE_CELLS * coarse).min(task.omega.size_trans);
+    // The centre is read at the relative poses near the goal alone.
+    centre.omega.reach = 1.0;
     // Whole-pixel shifts: the pixel divides the step (the task's pixel where it does).
     let per_step = (step / task.depth.pixel).round();
     if per_step < 1.0 || (step / task.depth.pixel - per_step).abs() > 1e-6 {

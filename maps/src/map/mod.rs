@@ -250,12 +250,14 @@ pub(crate) mod tests {
             min: -2e-3,
             step: 1e-3,
             count: 5,
+            omega: None,
         };
         let y = GridAxis {
             dof: Dof::new(Pose::Object, Axis::Y),
             min: -1e-3,
             step: 1e-3,
             count: 3,
+            omega: None,
         };
         let grid = Grid::new(vec![x, y]).unwrap();
         let meta = MapMeta {

@@ -115,6 +115,13 @@ pub struct Omega {
     /// Rotational step (rad).
     #[serde(default = "default_delta_rot")]
     pub delta_rot: f64,
+    /// How far the map samples the object's x and y, in Omega's half-widths (default 2,
+    /// at least 1): the filter reads the map at the part's pose
+    /// relative to the TCP, and a part anywhere in Omega seen from a TCP anywhere in Omega
+    /// lies up to twice Omega's half-width off. 1 samples Omega alone (a quarter of the
+    /// cells over x and y; beyond it the lookup reads Omega's edge).
+    #[serde(default = "default_reach")]
+    pub reach: f64,
     /// n-fold symmetry of the fit about the approach axis (z): the parts look the same
     /// after 1/n of a turn, so `object.rz` wraps around with period 2 pi / n. Omega's
     /// rotational bound must then be half that period (pi / n).
@@ -124,6 +131,23 @@ pub struct Omega {
 
 fn default_delta_rot() -> f64 {
     0.5f64.to_radians()
+}
+
+/// A part anywhere in Omega seen from a TCP anywhere in Omega.
+fn default_reach() -> f64 {
+    2.0
+}
+
+/// The largest `omega.reach`: farther than a part and a TCP in Omega can be apart is waste.
+const MAX_REACH: f64 = 2.0;
+
+/// Checks `omega.reach`: within [1, [`MAX_REACH`]].
+fn check_reach(reach: f64) -> std::result::Result<(), String> {
+    if (1.0..=MAX_REACH).contains(&reach) {
+        Ok(())
+    } else {
+        Err(format!("omega.reach {reach} must lie in [1, {MAX_REACH}]"))
+    }
 }
 
 /// Checks an n-fold symmetry about the approach: n >= 2, the approach along z (the axis
@@ -344,6 +368,7 @@ impl Task {
         if let Some(n) = file.omega.symmetry {
             check_symmetry(n, &file.omega, contact.approach).map_err(err)?;
         }
+        check_reach(file.omega.reach).map_err(err)?;
         let task = Self {
             name: file.name,
             description: file.description,
@@ -392,7 +417,8 @@ impl Task {
         Ok(dofs)
     }
 
-    /// The grid over Omega; the pixel size must divide the translation step.
+    /// The map's grid: Omega, its object x and y sampled out to `omega.reach` times its
+    /// half-width; the pixel size must divide the translation step.
     pub fn grid(&self) -> Result<Grid> {
         let o = &self.omega;
         let ratio = o.delta_trans / self.depth.pixel;
@@ -405,11 +431,23 @@ impl Task {
                 ),
             });
         }
+        check_reach(o.reach).map_err(|reason| MapError::Task {
+            path: self.path.clone(),
+            reason,
+        })?;
         let axes = self
             .dofs()?
             .into_iter()
             .map(|dof| {
-                if dof.is_rotation() {
+                if dof.pose == Pose::Object && matches!(dof.axis, Axis::X | Axis::Y) {
+                    let reaching = o.reach > 1.0 && o.size_trans > 0.0;
+                    GridAxis::symmetric(dof, o.size_trans * o.reach, o.delta_trans).map(|a| {
+                        GridAxis {
+                            omega: reaching.then_some(o.size_trans),
+                            ..a
+                        }
+                    })
+                } else if dof.is_rotation() {
                     GridAxis::symmetric(dof, o.size_rot, o.delta_rot)
                 } else if dof.pose == Pose::Grip {
                     GridAxis::symmetric(
@@ -526,6 +564,31 @@ mod tests {
     }
 
     #[test]
+    fn the_map_samples_the_object_s_x_and_y_out_to_the_reach_and_the_rest_over_omega() {
+        let tilted = Task::find("peg_in_hole_4dof").expect("task");
+        let grid = tilted.grid().expect("grid");
+        let axes = grid.axes();
+        for a in &axes[..2] {
+            // 5 mm Omega at 0.1 mm, sampled out to 10 mm.
+            assert_eq!((a.count, a.omega), (201, Some(0.005)), "{}", a.dof);
+            assert!((a.min + 0.01).abs() < 1e-12 && a.omega_bounds() == [-0.005, 0.005]);
+        }
+        for a in &axes[2..] {
+            assert_eq!(
+                (a.count, a.omega),
+                (9, None),
+                "{}: rotations over Omega",
+                a.dof
+            );
+        }
+        let mut alone = tilted.clone();
+        alone.omega.reach = 1.0;
+        let grid = alone.grid().expect("grid");
+        assert!(grid.axes().iter().all(|a| a.omega.is_none()));
+        assert_eq!(grid.axes()[0].count, 101);
+    }
+
+    #[test]
     fn broken_tables_are_named_with_the_file() {
         let dir = temp_dir("bad");
         let path = dir.join("task.toml");
@@ -592,6 +655,16 @@ mod tests {
                 format!("{peg}\n[scene]\nfloor = 1\n"),
                 "scene",
                 "unknown field",
+            ),
+            (
+                peg.replace("size_trans = 0.005", "size_trans = 0.005\nreach = 0.5"),
+                "omega.reach",
+                "[1, 2]",
+            ),
+            (
+                peg.replace("size_trans = 0.005", "size_trans = 0.005\nreach = 3.0"),
+                "omega.reach",
+                "[1, 2]",
             ),
         ];
         for (text, table, needle) in cases {

@@ -20,6 +20,11 @@ pub struct GridAxis {
     pub step: f64,
     /// Number of samples, >= 1.
     pub count: usize,
+    /// Half-width of Omega on an axis that samples farther, [-omega, omega] (m or rad): the
+    /// object's x and y, which the filter reads at the part's pose relative to a TCP
+    /// anywhere in Omega ([`crate::task::Omega::reach`]); absent where the axis is Omega.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub omega: Option<f64>,
 }
 
 impl GridAxis {
@@ -36,7 +41,14 @@ impl GridAxis {
             min: -(half as f64) * step,
             step,
             count: 2 * half + 1,
+            omega: None,
         })
+    }
+
+    /// Omega's bounds on this axis (m or rad): [-omega, omega] on an axis that samples
+    /// farther, else the axis's own.
+    pub fn omega_bounds(&self) -> [f64; 2] {
+        self.omega.map_or([self.min, self.max()], |h| [-h, h])
     }
 
     /// Value of sample `i`.
@@ -99,7 +111,8 @@ impl From<Grid> for GridRepr {
 }
 
 impl Grid {
-    /// Builds a grid; refuses repeated DOFs, empty axes and non-positive steps.
+    /// Builds a grid; refuses repeated DOFs, empty axes, non-positive steps and an Omega
+    /// outside its axis.
     pub fn new(axes: Vec<GridAxis>) -> Result<Self> {
         if axes.len() > MAX_AXES {
             return Err(MapError::Grid(format!(
@@ -112,6 +125,16 @@ impl Grid {
                 return Err(MapError::Grid(format!(
                     "axis {}: count {} must be >= 1, step {} > 0 and finite, min {} finite",
                     a.dof, a.count, a.step, a.min
+                )));
+            }
+            if let Some(h) = a.omega
+                && !(h > 0.0 && h.is_finite() && a.contains(-h) && a.contains(h))
+            {
+                return Err(MapError::Grid(format!(
+                    "axis {}: Omega's half-width {h} must be > 0 and within the axis [{}, {}]",
+                    a.dof,
+                    a.min,
+                    a.max()
                 )));
             }
             if axes[..i].iter().any(|b| b.dof == a.dof) {
@@ -279,12 +302,14 @@ mod tests {
             min: -1.0,
             step: 0.5,
             count: 5,
+            omega: None,
         };
         let b = GridAxis {
             dof: dof(Axis::Y),
             min: 0.0,
             step: 1.0,
             count: 3,
+            omega: None,
         };
         let g = Grid::new(vec![a, b]).unwrap();
         assert_eq!(g.flat(&[0, 1]), 1);
@@ -305,18 +330,21 @@ mod tests {
             min: -1.0,
             step: 0.5,
             count: 5,
+            omega: None,
         };
         let b = GridAxis {
             dof: dof(Axis::Y),
             min: 0.0,
             step: 1.0,
             count: 3,
+            omega: None,
         };
         let c = GridAxis {
             dof: dof(Axis::Rz),
             min: 0.0,
             step: 0.1,
             count: 4,
+            omega: None,
         };
         let g = Grid::new(vec![a, b, c]).unwrap();
         let lin = |p: &[f64]| 2.0 * p[0] - 3.0 * p[1] + 5.0 * p[2] + 1.0;
@@ -343,10 +371,32 @@ mod tests {
             min: 0.0,
             step: 0.5,
             count: 5,
+            omega: None,
         };
         assert!(Grid::new(vec![a, a]).is_err());
         assert!(Grid::new(vec![GridAxis { count: 0, ..a }]).is_err());
         assert!(Grid::new(vec![GridAxis { step: 0.0, ..a }]).is_err());
         assert!(GridAxis::symmetric(dof(Axis::X), 1.0, f64::NAN).is_err());
+        for h in [0.0, -1.0, 2.5, f64::NAN] {
+            let e = Grid::new(vec![GridAxis {
+                omega: Some(h),
+                ..a
+            }])
+            .expect_err("bad Omega");
+            assert!(e.to_string().contains("Omega's half-width"), "{h}: {e}");
+        }
+    }
+
+    #[test]
+    fn omega_is_the_axis_unless_it_samples_farther() {
+        let a = GridAxis::symmetric(dof(Axis::X), 1.0, 0.5).unwrap();
+        assert_eq!(a.omega_bounds(), [-1.0, 1.0]);
+        let wide = GridAxis::symmetric(dof(Axis::X), 2.0, 0.5).unwrap();
+        let wide = GridAxis {
+            omega: Some(1.0),
+            ..wide
+        };
+        assert_eq!(wide.omega_bounds(), [-1.0, 1.0]);
+        assert_eq!(Grid::new(vec![wide]).unwrap().axes()[0].omega, Some(1.0));
     }
 }
