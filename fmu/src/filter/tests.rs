@@ -487,16 +487,24 @@ fn a_non_finite_measurement_is_refused_and_changes_nothing() {
     assert_eq!(f.measurements(), 0);
 }
 
+/// The particles' least and greatest value on each axis (m).
+fn bounds(f: &Filter) -> [[f64; 2]; 2] {
+    std::array::from_fn(|k| {
+        (0..f.config().particles)
+            .map(|i| f.particle(i, k))
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], x| {
+                [a.min(x), b.max(x)]
+            })
+    })
+}
+
 #[test]
 fn the_uniform_start_covers_omega_and_is_not_converged() {
     let f = filter(15);
     let est = f.estimate();
     assert!(!est.converged && est.confidence < 0.05, "{est:?}");
     assert!((est.ess - 4000.0).abs() < 1e-6 * 4000.0);
-    for k in 0..2 {
-        let (lo, hi) = (0..4000)
-            .map(|i| f.particle(i, k))
-            .fold((1.0f64, -1.0f64), |(a, b), x| (a.min(x), b.max(x)));
+    for [lo, hi] in bounds(&f) {
         assert!(
             lo >= -5e-3 - 1e-12 && hi <= 5e-3 + 1e-12 && lo < -4.9e-3 && hi > 4.9e-3,
             "{lo} {hi}"
@@ -526,17 +534,6 @@ fn after_contacts(
             .expect("finite");
     }
     f
-}
-
-/// The particles' least and greatest value on each axis (m).
-fn bounds(f: &Filter) -> [[f64; 2]; 2] {
-    std::array::from_fn(|k| {
-        (0..f.config().particles)
-            .map(|i| f.particle(i, k))
-            .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], x| {
-                [a.min(x), b.max(x)]
-            })
-    })
 }
 
 #[test]

@@ -563,8 +563,11 @@ fn cmd_info(file: &Path) -> Result<()> {
     }
     println!("grid       {} axes, {} cells", g.ndim(), g.cells());
     for a in g.axes() {
+        let omega = a.omega.map_or(String::new(), |h| {
+            format!(", Omega {}", a.dof.display(h).replace('+', "±"))
+        });
         println!(
-            "  {:<10} {} .. {} step {} ({} samples)",
+            "  {:<10} {} .. {} step {} ({} samples{omega})",
             a.dof.to_string(),
             a.dof.display(a.min),
             a.dof.display(a.max()),

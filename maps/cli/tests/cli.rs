@@ -51,7 +51,12 @@ fn generate_info_export_and_plot_agree_with_each_other() {
     assert!(out.contains("configs/s"), "{out}");
     let info = ok(&["info", map.to_str().unwrap()]);
     assert!(
-        info.contains("object.x") && info.contains("25 cells") && info.contains("Centroid"),
+        info.contains("object.x") && info.contains("81 cells") && info.contains("Centroid"),
+        "{info}"
+    );
+    // Omega's ±1 mm sampled out to ±2 mm at 0.5 mm: 9 x 9 cells.
+    assert!(
+        info.contains("-2.000 mm .. +2.000 mm step 0.500 mm (9 samples, Omega ±1.000 mm)"),
         "{info}"
     );
     // The fit's clearance, from the task's [geometry] (Ø 10.0 mm hole, Ø 9.9 mm peg).
@@ -82,7 +87,7 @@ fn generate_info_export_and_plot_agree_with_each_other() {
         }
         rows += 1;
     }
-    assert_eq!(rows, 25);
+    assert_eq!(rows, 81);
 
     let png = dir.join("ty.png");
     ok(&[
@@ -323,7 +328,7 @@ fn blend_corrects_a_computed_map_by_a_measured_one() {
         "--out",
         blended.to_str().unwrap(),
     ]);
-    assert!(out.contains("25 measured cells"), "{out}");
+    assert!(out.contains("81 measured cells"), "{out}");
     let b = ftmap::map::format::load(&blended).unwrap();
     assert_eq!(b.meta().model, ftmap::WrenchModel::Blended);
     for (x, y) in b.data().iter().zip(m.data()) {
