@@ -116,10 +116,10 @@ pub struct Omega {
     #[serde(default = "default_delta_rot")]
     pub delta_rot: f64,
     /// How far the map samples the object's x and y, in Omega's half-widths (default 2,
-    /// at least 1): the filter reads the map at the part's pose
-    /// relative to the TCP, and a part anywhere in Omega seen from a TCP anywhere in Omega
-    /// lies up to twice Omega's half-width off. 1 samples Omega alone (a quarter of the
-    /// cells over x and y; beyond it the lookup reads Omega's edge).
+    /// at least 1): the filter reads the map at the part's pose relative to the TCP, and a
+    /// part anywhere in Omega seen from a TCP anywhere in Omega lies up to twice Omega's
+    /// half-width off. 1 samples Omega alone (a quarter of the cells over x and y; beyond
+    /// it the lookup reads Omega's edge).
     #[serde(default = "default_reach")]
     pub reach: f64,
     /// n-fold symmetry of the fit about the approach axis (z): the parts look the same
