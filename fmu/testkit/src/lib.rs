@@ -62,13 +62,10 @@ pub fn peg_map_reaching(
     rot: Option<(f64, f64)>,
 ) -> ftmap::Result<FtMap> {
     let dof = |a| Dof::new(Pose::Object, a);
-    let translation = |a| {
-        GridAxis::symmetric(dof(a), size * reach, step).map(|g| GridAxis {
-            omega: (reach > 1.0).then_some(size),
-            ..g
-        })
-    };
-    let mut axes = vec![translation(Axis::X)?, translation(Axis::Y)?];
+    let mut axes = vec![
+        GridAxis::reaching(dof(Axis::X), size, reach, step)?,
+        GridAxis::reaching(dof(Axis::Y), size, reach, step)?,
+    ];
     if let Some((s, d)) = rot {
         axes.push(GridAxis::symmetric(dof(Axis::Rx), s, d)?);
         axes.push(GridAxis::symmetric(dof(Axis::Ry), s, d)?);

@@ -440,13 +440,7 @@ impl Task {
             .into_iter()
             .map(|dof| {
                 if dof.pose == Pose::Object && matches!(dof.axis, Axis::X | Axis::Y) {
-                    let reaching = o.reach > 1.0 && o.size_trans > 0.0;
-                    GridAxis::symmetric(dof, o.size_trans * o.reach, o.delta_trans).map(|a| {
-                        GridAxis {
-                            omega: reaching.then_some(o.size_trans),
-                            ..a
-                        }
-                    })
+                    GridAxis::reaching(dof, o.size_trans, o.reach, o.delta_trans)
                 } else if dof.is_rotation() {
                     GridAxis::symmetric(dof, o.size_rot, o.delta_rot)
                 } else if dof.pose == Pose::Grip {

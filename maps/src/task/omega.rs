@@ -45,6 +45,16 @@ impl GridAxis {
         })
     }
 
+    /// A symmetric axis over Omega's +-`size` at `step`, sampled out to `reach` times `size`
+    /// (at least 1; [`GridAxis::omega`] set where it samples farther).
+    pub fn reaching(dof: Dof, size: f64, reach: f64, step: f64) -> Result<Self> {
+        let farther = reach > 1.0 && size > 0.0;
+        Self::symmetric(dof, size * reach, step).map(|a| Self {
+            omega: farther.then_some(size),
+            ..a
+        })
+    }
+
     /// Omega's bounds on this axis (m or rad): [-omega, omega] on an axis that samples
     /// farther, else the axis's own.
     pub fn omega_bounds(&self) -> [f64; 2] {
@@ -391,11 +401,7 @@ mod tests {
     fn omega_is_the_axis_unless_it_samples_farther() {
         let a = GridAxis::symmetric(dof(Axis::X), 1.0, 0.5).unwrap();
         assert_eq!(a.omega_bounds(), [-1.0, 1.0]);
-        let wide = GridAxis::symmetric(dof(Axis::X), 2.0, 0.5).unwrap();
-        let wide = GridAxis {
-            omega: Some(1.0),
-            ..wide
-        };
+        let wide = GridAxis::reaching(dof(Axis::X), 1.0, 2.0, 0.5).unwrap();
         assert_eq!(wide.omega_bounds(), [-1.0, 1.0]);
         assert_eq!(Grid::new(vec![wide]).unwrap().axes()[0].omega, Some(1.0));
     }
