@@ -135,6 +135,9 @@ pub struct CampaignOptions {
     /// FMU parameter `mismatch_interpolation` (share of the lookup's interpolation error).
     #[serde(default)]
     pub mismatch_interpolation: Option<f64>,
+    /// FMU parameter `tilt_floor` (rad; negative: off).
+    #[serde(default)]
+    pub tilt_floor: Option<f64>,
     /// Measure the scene's misses against the map before the trials and hand them to the
     /// FMU as `mismatch` and `mismatch_angle` where those are not given ([`mismatch`]).
     #[serde(default)]
@@ -938,6 +941,7 @@ fn trial_config(
             mismatch_angle: options.mismatch_angle,
             mismatch_position: options.mismatch_position,
             mismatch_interpolation: options.mismatch_interpolation,
+            tilt_floor: options.tilt_floor,
             lost: options.lost,
             sigma_vision: options.sigma_vision,
             vision_method: Some(options.vision_method.parameter()),

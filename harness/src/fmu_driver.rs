@@ -50,6 +50,8 @@ pub struct Settings {
     pub mismatch_position: Option<f64>,
     /// `mismatch_interpolation` (share of the lookup's interpolation error).
     pub mismatch_interpolation: Option<f64>,
+    /// `tilt_floor` (rad; negative: off).
+    pub tilt_floor: Option<f64>,
     /// `lost` (prior probability per measurement that the particles lost the truth).
     pub lost: Option<f64>,
     /// `vision`: an absolute path of a vision model file.
@@ -120,6 +122,7 @@ struct Refs {
     mismatch_angle: u32,
     mismatch_position: u32,
     mismatch_interpolation: u32,
+    tilt_floor: u32,
     lost: u32,
     sigma_force: u32,
     sigma_depth: u32,
@@ -220,6 +223,7 @@ impl Fmu {
             mismatch_angle: vr("mismatch_angle")?,
             mismatch_position: vr("mismatch_position")?,
             mismatch_interpolation: vr("mismatch_interpolation")?,
+            tilt_floor: vr("tilt_floor")?,
             lost: vr("lost")?,
             sigma_force: vr("sigma_force")?,
             sigma_depth: vr("sigma_depth")?,
@@ -301,6 +305,7 @@ impl Fmu {
                 settings.mismatch_interpolation,
                 "mismatch_interpolation",
             ),
+            (r.tilt_floor, settings.tilt_floor, "tilt_floor"),
             (r.lost, settings.lost, "lost"),
             (r.sigma_vision, settings.sigma_vision, "sigma_vision"),
         ];

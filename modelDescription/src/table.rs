@@ -460,6 +460,19 @@ pub const VARIABLES: &[Variable] = &[
          is the interpolated map itself). The nearest-cell lookup counts that share of its \
          cell's width (a step h: h^2 / 12) in the position term instead",
     ),
+    param(
+        "tilt_floor",
+        120,
+        Real,
+        Start::Real(0.0),
+        "rad",
+        [Some(-1.0), Some(1.0)],
+        "On a map of the object's tilts about x and y: the relative tilt below which the \
+         force and torque are read where the tilt's direction meets this radius (a flat face \
+         tilted by any angle rests on its lowest edge, so its wrench follows the tilt's \
+         direction, not its size; depth and insertion are read where the particle lies); \
+         0: the diagonal of the map's tilt step; negative: off",
+    ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
         "vision",

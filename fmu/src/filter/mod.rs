@@ -109,6 +109,10 @@ pub struct Config {
     /// interpolation error the map's second differences imply; nearest cell: the cell's
     /// width, as a position error in the position term.
     pub mismatch_interpolation: f64,
+    /// Relative tilt (rad) below which a flat face's force and torque are read along the
+    /// tilt's direction, where the map samples the object's tilts about x and y: 0, the
+    /// diagonal of the map's tilt step; negative, where each particle lies.
+    pub tilt_floor: f64,
     /// Prior probability that the particle set has lost the truth (e.g. locked on a wrong
     /// hypothesis by a contact the map did not explain): where the measurements since the
     /// set last explained one better than the prior make that more likely than not, half the
@@ -135,6 +139,7 @@ impl Default for Config {
             mismatch_angle: 0.02,
             mismatch_position: 5e-6,
             mismatch_interpolation: 1.0,
+            tilt_floor: 0.0,
             lost: 1e-9,
         }
     }
@@ -387,15 +392,16 @@ impl Filter {
         let use_depth = c.sigma_depth > 0.0
             && self.lookup.has_depth()
             && (negative.is_none() || self.lookup.below_top(height, 2.0 * c.sigma_depth));
+        let wrench = self.lookup.compared(m.wrench);
         let mut meas = [0.0f32; LANES];
-        for (dst, &src) in meas.iter_mut().zip(&m.wrench) {
+        for (dst, &src) in meas.iter_mut().zip(&wrench) {
             *dst = src as f32;
         }
         meas[6] = height as f32;
         let [force, torque] = self.lookup.largest();
         let (f, t) = (
-            Mismatch::of(c, c.sigma_force, &m.wrench[..3], force),
-            Mismatch::of(c, c.sigma_torque, &m.wrench[3..], torque),
+            Mismatch::of(c, c.sigma_force, &wrench[..3], force),
+            Mismatch::of(c, c.sigma_torque, &wrench[3..], torque),
         );
         let vd = if use_depth {
             (1.0 / (c.sigma_depth * c.sigma_depth)) as f32
@@ -421,6 +427,11 @@ impl Filter {
             along: [f.along, t.along],
             position: position as f32,
             interpolation: interpolation as f32,
+            tilt_floor: match c.tilt_floor {
+                f if f > 0.0 => f as f32,
+                0.0 => self.lookup.tilt_floor().unwrap_or(0.0) as f32,
+                _ => 0.0,
+            },
             ..Weights::default()
         }
         .student(c.tail as f32);

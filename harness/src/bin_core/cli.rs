@@ -288,6 +288,10 @@ pub struct RunArgs {
     /// error that counts as mismatch; 0: none).
     #[arg(long)]
     pub mismatch_interpolation: Option<f64>,
+    /// FMU parameter `tilt_floor` (rad: the relative tilt below which a flat face's wrench
+    /// is read along the tilt's direction; 0: the map's tilt step's diagonal; negative: off).
+    #[arg(long, allow_negative_numbers = true)]
+    pub tilt_floor: Option<f64>,
     /// Measure the scene's misses against the map before the trials (96 presses, cached) and
     /// hand them to the FMU as `mismatch` and `mismatch_angle` where those are not given.
     #[arg(long)]
@@ -418,6 +422,7 @@ impl RunArgs {
             mismatch_angle: self.mismatch_angle,
             mismatch_position: self.mismatch_position,
             mismatch_interpolation: self.mismatch_interpolation,
+            tilt_floor: self.tilt_floor,
             measure_mismatch: self.measure_mismatch,
             lost: self.lost,
             world: match self.world {

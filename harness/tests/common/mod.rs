@@ -63,6 +63,12 @@ pub fn chamfered(name: &str, peg: f64, hole: f64) -> (Task, Sim) {
 /// 0.5), written to a scratch folder with its meshes and scene (a wrist with rx, ry
 /// hinges), and a simulation of that scene.
 pub fn tilted() -> (Task, Sim) {
+    tilted_with_band(None)
+}
+
+/// [`tilted`] with the contact band `tolerance` (m) of peg_in_hole_4dof where given, the
+/// committed peg's (20 µm) where not.
+pub fn tilted_with_band(tolerance: Option<f64>) -> (Task, Sim) {
     let committed = Task::find("peg_in_hole").expect("a committed task");
     let text = std::fs::read_to_string(&committed.path).expect("its task file");
     // A folder per call: tests run in parallel, and one rewriting the task file another
@@ -78,9 +84,17 @@ pub fn tilted() -> (Task, Sim) {
             "object = [\"x\", \"y\"]",
             "object = [\"x\", \"y\", \"rx\", \"ry\"]",
         )
-        .replace("size_rot = 0.0", "size_rot = 0.03490658503988659");
+        .replace("size_rot = 0.0", "size_rot = 0.03490658503988659")
+        .replace(
+            "tolerance = 0.00002 ",
+            &tolerance.map_or("tolerance = 0.00002 ".into(), |t| {
+                format!("tolerance = {t} ")
+            }),
+        );
     assert!(
-        tilted.contains("\"rx\"") && tilted.contains("0.0349"),
+        tilted.contains("\"rx\"")
+            && tilted.contains("0.0349")
+            && tolerance.is_none_or(|t| tilted.contains(&format!("tolerance = {t} "))),
         "the edits took"
     );
     std::fs::write(&path, tilted).expect("the tilted task file");
