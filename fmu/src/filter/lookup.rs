@@ -134,7 +134,7 @@ pub struct Lookup {
     depth_range: Option<[f32; 2]>,
     approach: [f64; 3],
     clearance: Option<f64>,
-    /// Largest force and torque magnitudes over the map's cells (torques about the face).
+    /// Largest force and torque magnitudes over the cells (as [`Lookup::compared`] reads).
     largest: [f64; 2],
     /// The sensor's origin in the task frame (m), where the filter compares torques about
     /// the contact face instead ([`about_face`]: on a map that samples the object's tilts).
