@@ -375,7 +375,7 @@ fn relative_tilted(object: [f64; 2], rot: [f64; 3], tcp: [f64; 3], tcp_rot: [f64
     use nalgebra::{Rotation3, Vector3};
     let inverse = Rotation3::new(Vector3::from(tcp_rot)).inverse();
     let t = inverse * (Vector3::new(object[0], object[1], 0.0) - Vector3::from(tcp));
-    let r = (inverse * Rotation3::new(Vector3::from(rot))).scaled_axis();
+    let r = harness::trial::rotation_error(tcp_rot, rot, None);
     [t[0], t[1], r[0], r[1]]
 }
 

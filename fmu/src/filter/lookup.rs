@@ -223,11 +223,8 @@ impl Tilts {
                 scale = bound / t;
             }
         }
-        let inside = theta
-            .iter()
-            .enumerate()
-            .all(|(j, t)| (self.min[j]..=self.max[j]).contains(t));
-        if scale == 1.0 && inside {
+        // Unscaled, the tilt lies within the range (no bound scaled it down).
+        if scale == 1.0 {
             return false;
         }
         for (k, o) in out.iter_mut().enumerate() {
