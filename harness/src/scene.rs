@@ -1241,9 +1241,23 @@ pub fn scene_path(task: &Task) -> PathBuf {
 /// # Errors
 /// When the task has no `[geometry]` or the file cannot be written.
 pub fn write_scene(task: &Task) -> Result<PathBuf> {
+    write_scene_of(task, &SceneSpec::of_task(task)?)
+}
+
+/// Writes `spec`'s MJCF as `task`'s scene file, whole or not at all: a temporary file
+/// renamed over it, so that a worker opening it meanwhile reads the old one or the new one.
+///
+/// # Errors
+/// When the file cannot be written.
+pub fn write_scene_of(task: &Task, spec: &SceneSpec) -> Result<PathBuf> {
     let path = scene_path(task);
-    let text = SceneSpec::of_task(task)?.mjcf();
-    std::fs::write(&path, text).map_err(|e| HarnessError::io(&path, e))?;
+    let tmp = path.with_extension(format!(
+        "xml.{}-{:?}.tmp",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    std::fs::write(&tmp, spec.mjcf()).map_err(|e| HarnessError::io(&tmp, e))?;
+    std::fs::rename(&tmp, &path).map_err(|e| HarnessError::io(&path, e))?;
     Ok(path)
 }
 

@@ -25,7 +25,9 @@ use mujoco_rs::prelude::*;
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 
 use crate::error::{HarnessError, Result};
-use crate::scene::{APPROACH_CLEARANCE, SceneSpec, WRIST_JOINTS, scene_path, write_scene};
+use crate::scene::{
+    APPROACH_CLEARANCE, SceneSpec, WRIST_JOINTS, scene_path, write_scene, write_scene_of,
+};
 use crate::world::{Contact, World};
 
 /// Longest contact motion (s of simulated time) before it is reported as not settled.
@@ -178,12 +180,18 @@ impl Sim {
         })
     }
 
-    /// Loads a task's committed scene.
+    /// Loads a task's scene: the committed one; a task without `[geometry]`, whose scene
+    /// comes from its meshes and is not committed, gets it written first where it has none.
     ///
     /// # Errors
-    /// As [`Sim::load`], and when the task has no `[geometry]`.
+    /// As [`Sim::load`], and when the scene cannot be made or written.
     pub fn of_task(task: &Task) -> Result<Self> {
-        Self::load(&scene_path(task), SceneSpec::of_task(task)?)
+        let spec = SceneSpec::of_task(task)?;
+        let path = scene_path(task);
+        if task.geometry().is_err() && !path.is_file() {
+            write_scene_of(task, &spec)?;
+        }
+        Self::load(&path, spec)
     }
 
     /// The scene description this simulation was generated from.

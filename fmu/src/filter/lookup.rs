@@ -574,10 +574,15 @@ impl Lookup {
     /// Writes each particle's map coordinates (grid units, axis-major like `pos`, folded
     /// into the axes) for the TCP pose `tcp` into `out`: the object's pose relative to the
     /// TCP's, T_tcp^-1 T_object (grip DOFs and `object.z`, the approach, as they are).
-    /// Without a TCP rotation that is the particle's object pose minus the TCP's; with one,
-    /// the poses are composed exactly, the TCP at its contact height.
-    pub fn relative(&self, pos: &[f32], tcp: &[f64; 6], out: &mut [f32]) {
+    /// Without a TCP rotation that is the particle's object pose minus the TCP's, and
+    /// `heights` is left empty: every particle sees the TCP's height. With one, the poses
+    /// are composed exactly, the TCP at its contact height, and `heights` receives each
+    /// particle's contact height along the tool's axis, which is what the depth channel
+    /// holds (a TCP tilted by 2 degrees 2 mm beside the object's origin is 70 µm higher
+    /// along its axis than along the world's).
+    pub fn relative(&self, pos: &[f32], tcp: &[f64; 6], out: &mut [f32], heights: &mut Vec<f32>) {
         let n = pos.len() / self.ndim().max(1);
+        heights.clear();
         if tcp[3..].iter().all(|r| *r == 0.0) {
             for (k, a) in self.level.axes.iter().enumerate() {
                 let shift = a.tcp.map_or(0.0, |c| (tcp[c] / a.step) as f32);
@@ -605,6 +610,13 @@ impl Lookup {
             }
             let t = r_tcp * (Vector3::new(pose[0], pose[1], pose[2]) - t_tcp);
             let r = (r_tcp * Rotation3::new(Vector3::new(pose[3], pose[4], pose[5]))).scaled_axis();
+            heights.push(
+                self.approach
+                    .iter()
+                    .zip(t.iter())
+                    .map(|(a, v)| a * v)
+                    .sum::<f64>() as f32,
+            );
             for (k, a) in self.level.axes.iter().enumerate() {
                 out[k * n + i] = if a.dof.pose == Pose::Object && a.dof.axis != Axis::Z {
                     let c = a.dof.axis.index();
@@ -647,17 +659,25 @@ impl Lookup {
 
     /// Writes every particle's log-likelihood ([`Weights`]: Eq. 3 in log space, constants
     /// dropped) into `out`. `rel` holds the particles' map coordinates
-    /// axis-major (`rel[k * n + i]`, [`Lookup::relative`]), `w` the measurement and its
-    /// weights.
-    pub fn log_likelihood(&self, interp: Interpolation, rel: &[f32], w: &Weights, out: &mut [f32]) {
+    /// axis-major (`rel[k * n + i]`, [`Lookup::relative`]), `heights` their contact heights
+    /// along the tool's axis (empty: the measurement's, as with a level TCP), `w` the
+    /// measurement and its weights.
+    pub fn log_likelihood(
+        &self,
+        interp: Interpolation,
+        rel: &[f32],
+        heights: &[f32],
+        w: &Weights,
+        out: &mut [f32],
+    ) {
         macro_rules! dispatch {
             ($($d:literal)*) => {
                 match (self.ndim(), interp) {
                     $(
-                        ($d, Interpolation::Nearest) => self.ll_nearest::<$d>(rel, w, out),
-                        ($d, Interpolation::Multilinear) => self.ll_linear::<$d>(rel, w, out),
+                        ($d, Interpolation::Nearest) => self.ll_nearest::<$d>(rel, heights, w, out),
+                        ($d, Interpolation::Multilinear) => self.ll_linear::<$d>(rel, heights, w, out),
                     )*
-                    _ => self.ll_any(interp, rel, w, out),
+                    _ => self.ll_any(interp, rel, heights, w, out),
                 }
             };
         }
@@ -694,8 +714,14 @@ impl Lookup {
         )
     }
 
-    fn ll_nearest<const D: usize>(&self, rel: &[f32], w: &Weights, out: &mut [f32]) {
-        self.ll_read::<D>(rel, w, out, |level, p, u| {
+    fn ll_nearest<const D: usize>(
+        &self,
+        rel: &[f32],
+        heights: &[f32],
+        w: &Weights,
+        out: &mut [f32],
+    ) {
+        self.ll_read::<D>(rel, heights, w, out, |level, p, u| {
             let idx: usize = (0..D).map(|k| (u[k] + 0.5) as usize * p.stride[k]).sum();
             Sample {
                 lanes: level.cells[idx],
@@ -704,8 +730,14 @@ impl Lookup {
         });
     }
 
-    fn ll_linear<const D: usize>(&self, rel: &[f32], w: &Weights, out: &mut [f32]) {
-        self.ll_read::<D>(rel, w, out, |level, p, u| level.linear(p, u));
+    fn ll_linear<const D: usize>(
+        &self,
+        rel: &[f32],
+        heights: &[f32],
+        w: &Weights,
+        out: &mut [f32],
+    ) {
+        self.ll_read::<D>(rel, heights, w, out, |level, p, u| level.linear(p, u));
     }
 
     /// Every particle's log-likelihood with the sample `read` takes of a level at its
@@ -714,6 +746,7 @@ impl Lookup {
     fn ll_read<const D: usize>(
         &self,
         rel: &[f32],
+        heights: &[f32],
         w: &Weights,
         out: &mut [f32],
         read: impl Fn(&Level, &Params<D>, [f32; D]) -> Sample,
@@ -733,11 +766,18 @@ impl Lookup {
                 let (level, p, u) = self.level_at(along, &params);
                 at = at.with_wrench(read(level, p, u));
             }
-            *o = w.log_likelihood(&at.lanes, &at.terms);
+            *o = w.log_likelihood(&at.at_height(w, heights.get(i)), &at.terms);
         }
     }
 
-    fn ll_any(&self, interp: Interpolation, rel: &[f32], w: &Weights, out: &mut [f32]) {
+    fn ll_any(
+        &self,
+        interp: Interpolation,
+        rel: &[f32],
+        heights: &[f32],
+        w: &Weights,
+        out: &mut [f32],
+    ) {
         let n = out.len();
         let d = self.ndim();
         let (mut raw, mut u, mut along) = (vec![0.0f32; d], vec![0.0f32; d], vec![0.0f32; d]);
@@ -761,12 +801,24 @@ impl Lookup {
                 round(&mut along);
                 at = at.with_wrench(self.sample(&along));
             }
-            *o = w.log_likelihood(&at.lanes, &at.terms);
+            *o = w.log_likelihood(&at.at_height(w, heights.get(i)), &at.terms);
         }
     }
 }
 
 impl Sample {
+    /// Its channels as compared with `w`'s measurement by a particle whose contact height
+    /// along the tool's axis is `height` (none: the measured one): the depth shifted by
+    /// the difference, so that its residual is the particle's.
+    #[inline(always)]
+    fn at_height(&self, w: &Weights, height: Option<&f32>) -> [f32; LANES] {
+        let mut lanes = self.lanes;
+        if let Some(h) = height {
+            lanes[NCH - 1] += w.meas[NCH - 1] - h;
+        }
+        lanes
+    }
+
     /// This sample with the force, torque and their mismatch terms of `wrench`, read at
     /// another pose ([`Tilts`]); as it is where either went in.
     #[inline(always)]
@@ -1420,7 +1472,7 @@ mod tests {
                 )
             };
             let mut out = [0.0f32; 1];
-            lookup.log_likelihood(Interpolation::Multilinear, &rel, &w, &mut out);
+            lookup.log_likelihood(Interpolation::Multilinear, &rel, &[], &w, &mut out);
             -2.0 * f64::from(out[0])
         };
         for (size, direction) in [

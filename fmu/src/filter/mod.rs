@@ -204,6 +204,8 @@ struct Scratch {
     pos: Vec<f32>,
     /// The particles' map coordinates relative to the TCP.
     rel: Vec<f32>,
+    /// The particles' contact heights along a tilted tool's axis (empty for a level one).
+    heights: Vec<f32>,
     pick: Vec<u32>,
     /// The relocation probes' own poses, axis-major, while they stand for the prior.
     kept: Vec<f32>,
@@ -249,6 +251,7 @@ impl Filter {
                 w: vec![0.0; n],
                 pos: vec![0.0; n * d],
                 rel: vec![0.0; n * d],
+                heights: Vec::with_capacity(n),
                 pick: vec![0; n],
                 kept: vec![0.0; n.div_ceil(PROBE_EVERY) * d],
             },
@@ -467,12 +470,19 @@ impl Filter {
     }
 
     /// Each particle's log-likelihood of `ev` (Eq. 3: map residuals, image residuals) into
-    /// `ll`; `rel` receives the particles' map coordinates.
-    fn log_likelihood(&self, ev: &Evidence, rel: &mut [f32], ll: &mut [f32]) {
+    /// `ll`; `rel` and `heights` receive the particles' map coordinates and contact
+    /// heights ([`Lookup::relative`]).
+    fn log_likelihood(
+        &self,
+        ev: &Evidence,
+        rel: &mut [f32],
+        heights: &mut Vec<f32>,
+        ll: &mut [f32],
+    ) {
         if ev.force {
-            self.lookup.relative(&self.pos, &ev.tcp, rel);
+            self.lookup.relative(&self.pos, &ev.tcp, rel, heights);
             self.lookup
-                .log_likelihood(self.cfg.interpolation, rel, &ev.weights, ll);
+                .log_likelihood(self.cfg.interpolation, rel, heights, &ev.weights, ll);
             if let Some((negative, from, to)) = &ev.negative {
                 negative.add_log_likelihood(&self.pos, rel, *from, *to, ll);
             }
@@ -513,13 +523,15 @@ impl Filter {
         }
         let mut ll = std::mem::take(&mut self.scratch.ll);
         let mut rel = std::mem::take(&mut self.scratch.rel);
-        self.log_likelihood(ev, &mut rel, &mut ll);
+        let mut heights = std::mem::take(&mut self.scratch.heights);
+        self.log_likelihood(ev, &mut rel, &mut heights, &mut ll);
         let is_probe = |i: usize| i >= offset && (i - offset).is_multiple_of(PROBE_EVERY);
         let set = log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i] + ll[i]))
             - log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i]));
         let prior = log_sum_exp(probes.clone().map(|i| ll[i])) - (probes.len() as f64).ln();
         self.scratch.ll = ll;
         self.scratch.rel = rel;
+        self.scratch.heights = heights;
         for (j, i) in probes.enumerate() {
             for k in 0..d {
                 self.pos[k * n + i] = self.scratch.kept[j * d + k];
@@ -568,7 +580,8 @@ impl Filter {
     fn weigh(&mut self, ev: &Evidence, report: &mut Report) -> f64 {
         let mut ll = std::mem::take(&mut self.scratch.ll);
         let mut rel = std::mem::take(&mut self.scratch.rel);
-        self.log_likelihood(ev, &mut rel, &mut ll);
+        let mut heights = std::mem::take(&mut self.scratch.heights);
+        self.log_likelihood(ev, &mut rel, &mut heights, &mut ll);
         let best = ll.iter().copied().fold(f32::NEG_INFINITY, f32::max);
         // NaN cannot occur (inputs are checked finite); `best` is -inf only for no particle.
         if best < UNDERFLOW {
@@ -576,7 +589,7 @@ impl Filter {
             // old weights, and weigh again.
             report.respread += 1;
             self.respread(None);
-            self.log_likelihood(ev, &mut rel, &mut ll);
+            self.log_likelihood(ev, &mut rel, &mut heights, &mut ll);
             self.lw.fill(0.0);
         }
         // Each of the iterations weighs with the likelihood to the power 1 / iterations
@@ -587,6 +600,7 @@ impl Filter {
         }
         self.scratch.ll = ll;
         self.scratch.rel = rel;
+        self.scratch.heights = heights;
         normalise(&mut self.lw, &mut self.scratch.w)
     }
 

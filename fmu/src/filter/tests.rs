@@ -634,11 +634,12 @@ fn nearest_lookup_reads_cells_and_multilinear_interpolates() {
     // Every channel but the contact lane, which the filter never weighs.
     let inv: [f32; LANES] = std::array::from_fn(|l| if l < 7 { 1.0 } else { 0.0 });
     let w = Weights::diagonal(meas, inv);
-    lookup.log_likelihood(Interpolation::Multilinear, &half, &w, &mut ll);
+    lookup.log_likelihood(Interpolation::Multilinear, &half, &[], &w, &mut ll);
     assert!(ll[0].abs() < 1e-9, "{}", ll[0]);
     lookup.log_likelihood(
         Interpolation::Nearest,
         &[u[0] + 0.4, u[1] - 0.4],
+        &[],
         &w,
         &mut ll,
     );
@@ -1223,7 +1224,7 @@ fn a_centre_map_answers_within_its_region_and_the_map_beyond_it() {
             }
         }
         let mut out = vec![0.0f32; n];
-        lookup.log_likelihood(interp, &rel, &measured, &mut out);
+        lookup.log_likelihood(interp, &rel, &[], &measured, &mut out);
         out
     };
     for interp in [Interpolation::Multilinear, Interpolation::Nearest] {
