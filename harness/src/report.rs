@@ -186,9 +186,10 @@ pub struct DofError {
     pub max: f64,
 }
 
-/// The last approach's error per uncertain DOF of `task` over `results`: the TCP against
-/// the true offset on object x, y; [`TrialResult::final_rot_error`] on object rotations;
-/// the last grip estimate against the true grip on grip x, y.
+/// The last approach's error per uncertain DOF of `task` over `results`: where the tool's
+/// axis met the goal's height ([`Step::foot`]) against the true offset on object x, y;
+/// [`TrialResult::final_rot_error`] on object rotations; the last grip estimate against
+/// the true grip on grip x, y.
 fn final_errors(task: &Task, results: &[TrialResult]) -> Vec<DofError> {
     let dofs = task.dofs().unwrap_or_default();
     let error = |d: &ftmap::Dof, r: &TrialResult| -> Option<f64> {
@@ -197,7 +198,7 @@ fn final_errors(task: &Task, results: &[TrialResult]) -> Vec<DofError> {
             (Pose::Object, Axis::X | Axis::Y) => Some(
                 r.steps
                     .last()
-                    .map_or(r.offset[k], |s| s.tcp[k] - r.offset[k]),
+                    .map_or(r.offset[k], |s| s.foot()[k] - r.offset[k]),
             ),
             (Pose::Object, Axis::Rx | Axis::Ry | Axis::Rz) => Some(r.final_rot_error[k - 3]),
             (Pose::Grip, Axis::X | Axis::Y) => Some(

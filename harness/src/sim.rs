@@ -28,7 +28,7 @@ use crate::error::{HarnessError, Result};
 use crate::scene::{
     APPROACH_CLEARANCE, SceneSpec, WRIST_JOINTS, scene_path, write_scene, write_scene_of,
 };
-use crate::world::{Contact, World};
+use crate::world::{Contact, World, lean};
 
 /// Longest contact motion (s of simulated time) before it is reported as not settled.
 pub const MAX_TIME: f64 = 2.0;
@@ -225,8 +225,9 @@ impl Sim {
         // meets the goal's height (z = 0; at the top it is `lean` times that height off);
         // it starts higher by how far its face's edge dips.
         let [ax, ay, az] = self.wrist_angles;
-        let tool = Rotation3::from_euler_angles(ax, ay, az) * Vector3::z();
-        let lean = [tool.x / tool.z, tool.y / tool.z];
+        let turn = Rotation3::from_euler_angles(ax, ay, az);
+        let tool = turn * Vector3::z();
+        let lean = lean(&turn);
         let tilted = lean != [0.0, 0.0];
         let dip = if tilted {
             self.spec.face.reach * tool.x.hypot(tool.y)

@@ -18,7 +18,7 @@ use crate::error::Result;
 use crate::eye::Eye;
 use crate::fmu_driver::{Estimate, Fmu, Settings};
 use crate::sensor::{Noise, map_wrench};
-use crate::world::World;
+use crate::world::{World, lean};
 
 /// How the next approach point is chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -237,6 +237,18 @@ pub struct Step {
     pub twist: bool,
 }
 
+impl Step {
+    /// Where the tool's axis met the goal's height at this contact (x, y, m): the TCP's
+    /// own x, y for a level tool; what part B's offset is compared with.
+    pub fn foot(&self) -> [f64; 2] {
+        let l = lean(&nalgebra::Rotation3::new(nalgebra::Vector3::from(self.rot)));
+        [
+            self.tcp[0] - l[0] * self.tcp[2],
+            self.tcp[1] - l[1] * self.tcp[2],
+        ]
+    }
+}
+
 /// What a trial ended with.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TrialResult {
@@ -252,7 +264,8 @@ pub struct TrialResult {
     pub contacts: usize,
     /// Whether the part reached the goal depth.
     pub success: bool,
-    /// Distance of the last approach point from the true offset (m).
+    /// Distance of the last approach point (where the tool's axis met the goal's height) from
+    /// the true offset (m).
     pub final_error: f64,
     /// The last approach's rotation error: the rotation vector of R_tcp^T R_object (rad),
     /// its z component modulo the symmetry's period.
@@ -413,9 +426,20 @@ pub fn run_trial(
         };
         let estimate = match estimator.as_mut() {
             Some(e) => {
+                // Where the TCP itself stood when the sweep began (at the end's height and
+                // tilt): the motions are commanded where the tool's axis meets the goal's
+                // height, which a tilted TCP stands beside.
+                let lean = lean(&nalgebra::Rotation3::new(nalgebra::Vector3::from(c.rot)));
+                let tcp_at = |p: [f64; 2]| [p[0] + lean[0] * c.tcp[2], p[1] + lean[1] * c.tcp[2]];
                 let slide_start = match motion {
-                    Motion::Slide(from, _) => Some([from[0], from[1], c.rot[2]]),
-                    Motion::Twist(p, from, _) => Some([p[0], p[1], from]),
+                    Motion::Slide(from, _) => {
+                        let [x, y] = tcp_at(from);
+                        Some([x, y, c.rot[2]])
+                    }
+                    Motion::Twist(p, from, _) => {
+                        let [x, y] = tcp_at(p);
+                        Some([x, y, from])
+                    }
                     Motion::Contact(_) => None,
                 };
                 let est = e.measure(wrench, c.tcp, c.rot, slide_start, image.as_ref())?;
@@ -435,7 +459,7 @@ pub fn run_trial(
             twist,
         });
     }
-    let last = steps.last().map_or([0.0; 2], |s| [s.tcp[0], s.tcp[1]]);
+    let last = steps.last().map_or([0.0; 2], Step::foot);
     let last_rot = steps.last().map_or([0.0; 3], |s| s.rot);
     Ok(TrialResult {
         offset,
@@ -459,6 +483,32 @@ pub fn run_trial(
 mod tests {
     use super::*;
     use crate::sensor::gaussian;
+
+    #[test]
+    fn a_tilted_step_s_foot_lies_down_its_axis() {
+        // A TCP at height h tilted by t about y (its axis leaning towards +x going up) met
+        // the goal's height h tan t towards -x; about x, towards +y; level, under itself.
+        let (h, t) = (0.01f64, 0.03f64);
+        let step = |rot| Step {
+            tcp: [1e-3, -2e-3, h],
+            rot,
+            wrench: [0.0; 6],
+            estimate: None,
+            image: false,
+            slide: false,
+            twist: false,
+        };
+        assert_eq!(step([0.0, 0.0, 0.4]).foot(), [1e-3, -2e-3]);
+        let near = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-12;
+        assert!(near(
+            step([0.0, t, 0.0]).foot(),
+            [1e-3 - h * t.tan(), -2e-3]
+        ));
+        assert!(near(
+            step([t, 0.0, 0.0]).foot(),
+            [1e-3, -2e-3 + h * t.tan()]
+        ));
+    }
 
     #[test]
     fn the_spread_has_the_covariance_s_principal_axes() {

@@ -22,6 +22,14 @@ pub enum WorldKind {
     Map(Option<std::path::PathBuf>),
 }
 
+/// How far a TCP turned by `rot` stands beside the point where its tool's axis meets the
+/// goal's height, per metre of height (x, y): a contact motion is commanded at that point,
+/// and its [`Contact::tcp`] stands `lean * height` off it.
+pub fn lean(rot: &nalgebra::Rotation3<f64>) -> [f64; 2] {
+    let tool = rot * nalgebra::Vector3::z();
+    [tool.x / tool.z, tool.y / tool.z]
+}
+
 /// What one contact motion ends with.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Contact {

@@ -571,6 +571,22 @@ impl Lookup {
         -(self.approach[0] * tcp[0] + self.approach[1] * tcp[1] + self.approach[2] * tcp[2])
     }
 
+    /// Where the tool's axis through the TCP at `tcp` meets the goal's height (the plane
+    /// across the approach through the nominal goal): x, y (m). A level TCP's own x, y; a
+    /// TCP tilted by t at height h stands h tan t beside it (0.35 mm at 2 degrees and
+    /// 10 mm), and whether part A goes in is decided there, not under the TCP.
+    pub fn axis_foot(&self, tcp: &[f64; 6]) -> [f64; 2] {
+        use nalgebra::{Rotation3, Vector3};
+        let a = Vector3::from(self.approach);
+        let axis = Rotation3::new(Vector3::new(tcp[3], tcp[4], tcp[5])) * a;
+        if (axis - a).norm() < 1e-12 {
+            return [tcp[0], tcp[1]];
+        }
+        let p = Vector3::new(tcp[0], tcp[1], tcp[2]);
+        let foot = p - axis * (a.dot(&p) / a.dot(&axis));
+        [foot.x, foot.y]
+    }
+
     /// Writes each particle's map coordinates (grid units, axis-major like `pos`, folded
     /// into the axes) for the TCP pose `tcp` into `out`: the object's pose relative to the
     /// TCP's, T_tcp^-1 T_object (grip DOFs and `object.z`, the approach, as they are).

@@ -439,9 +439,18 @@ impl Filter {
         }
         .student(c.tail as f32);
         let evidence = Evidence {
+            // Where the tool's axis met the goal's height, at the end and (at the end's
+            // height and tilt) at the start.
             negative: negative.map(|n| {
-                let tcp = [m.tcp[0], m.tcp[1], m.tcp[5]];
-                (n.clone(), m.slide_start.unwrap_or(tcp), tcp)
+                let at = |x: f64, y: f64, rz: f64| {
+                    let [fx, fy] = self
+                        .lookup
+                        .axis_foot(&[x, y, m.tcp[2], m.tcp[3], m.tcp[4], rz]);
+                    [fx, fy, rz]
+                };
+                let end = at(m.tcp[0], m.tcp[1], m.tcp[5]);
+                let start = m.slide_start.map_or(end, |s| at(s[0], s[1], s[2]));
+                (n.clone(), start, end)
             }),
             tcp: m.tcp,
             weights,

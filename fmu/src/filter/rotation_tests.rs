@@ -309,3 +309,25 @@ fn a_tilted_tcp_s_particles_see_their_height_along_its_axis() {
     // 2 mm beside the TCP at 2 degrees the world's height misses by about 70 µm.
     assert!((f64::from(heights([0.0, t, 0.0])[1]) - h).abs() > 6e-5);
 }
+
+#[test]
+fn a_tilted_tcp_s_axis_meets_the_goal_s_height_beside_it() {
+    // Tilted by t about y at height h, the tool's axis (pointing down, -z turned) meets
+    // z = 0 at x - h tan t; about x, at y + h tan t. Level or turned about the axis alone,
+    // under the TCP itself.
+    let f = filter(1);
+    let (x, y, h, t): (f64, f64, f64, f64) = (1e-3, -2e-3, 0.01, 0.035);
+    let foot = |rot: [f64; 3]| f.lookup.axis_foot(&[x, y, h, rot[0], rot[1], rot[2]]);
+    assert_eq!(foot([0.0; 3]), [x, y]);
+    assert_eq!(foot([0.0, 0.0, 0.3]), [x, y]);
+    for (rot, want) in [
+        ([0.0, t, 0.0], [x - h * t.tan(), y]),
+        ([t, 0.0, 0.0], [x, y + h * t.tan()]),
+    ] {
+        let got = foot(rot);
+        assert!(
+            (got[0] - want[0]).abs() < 1e-12 && (got[1] - want[1]).abs() < 1e-12,
+            "{rot:?}: {got:?} vs {want:?}"
+        );
+    }
+}
