@@ -50,7 +50,8 @@ def test_a_sharded_map_merges_into_the_single_machine_map(scheduler, tmp_path):
             .replace('object = ["x", "y", "rx", "ry"]', 'object = ["x", "y", "rx"]')
             .replace("size_trans = 0.005", "size_trans = 0.001")
             .replace("delta_trans = 0.0001", "delta_trans = 0.0002")
-            .replace("size_rot = 0.03490658503988659", "size_rot = 0.008726646259971648"))
+            .replace("size_rot = 0.03490658503988659", "size_rot = 0.008726646259971648")
+            .replace("delta_rot = 0.004363323129985824", "delta_rot = 0.008726646259971648"))
     task.write_text(text)
     whole = tmp_path / "whole.ftmap"
     subprocess.run([str(FTMAP), "generate", "--task", str(task), "--out", str(whole)],

@@ -448,7 +448,7 @@ fn five_trials_on_the_tilted_hole_go_in_through_the_fmu() {
     // The committed task peg_in_hole_4dof as `harness trials --seed 21` runs it (its scene
     // written from its meshes on first use, its map computed from CAD): the hole within
     // ±5 mm and tilted within ±2 degrees, found and matched within 30 contacts in every
-    // trial (4-14 contacts when written).
+    // trial (3-13 contacts when written).
     let out = std::env::temp_dir().join(format!("ftfusion-tilted-{}", std::process::id()));
     let options: CampaignOptions = serde_json::from_value(serde_json::json!({
         "task": "peg_in_hole_4dof", "out": out, "seed": 21,

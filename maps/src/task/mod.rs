@@ -570,7 +570,7 @@ mod tests {
         for a in &axes[2..] {
             assert_eq!(
                 (a.count, a.omega),
-                (9, None),
+                (17, None),
                 "{}: rotations over Omega",
                 a.dof
             );
