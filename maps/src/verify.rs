@@ -6,7 +6,7 @@
 //! tolerance; the lever point of a centroid map's wrench with the second within a pixel.
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
-use parry3d_f64::query::{Ray, RayCast};
+use parry3d_f64::query::{self, ClosestPoints, Ray, RayCast};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{RngCore, SeedableRng};
 use rayon::prelude::*;
@@ -44,6 +44,8 @@ const REFINE: f64 = 2.0;
 /// its rows and each edge cuts the lattice at every phase (a lattice in phase with a
 /// straight edge puts its whole length up to half a pitch off at once).
 const LATTICE_TURN: f64 = 0.553_574_358_897_045_3;
+/// Finer lattices a search of the contact region tries at most.
+const SEARCHES: usize = 4;
 /// Clearance between the parts before the sweep, and past each mesh's bounds for rays (m).
 const MARGIN: f64 = 1e-3;
 
@@ -73,6 +75,9 @@ pub struct CellCheck {
     /// region's centroid (m): infinite where no ray along the approach sees the contact;
     /// `None` where the map's model does not put the lever at the centroid.
     pub centroid_error: Option<f64>,
+    /// The exact contact region's centroid across the approach (m; part A's view of
+    /// [`View::along`] its approach), where a ray along the approach sees the region.
+    pub centroid: Option<[f64; 2]>,
 }
 
 /// The checked cells and the bounds they are held to.
@@ -265,15 +270,23 @@ impl<'a> Parts<'a> {
         let rise = self
             .touch(&view.w, &b_pose, a_range, b_range)
             .ok_or_else(|| missed("part A swept along the approach misses part B"))?;
+        // Part B's face turned against part A's (both across the approach at rest).
+        let approach = Vector3::from(self.task.contact.approach);
+        let tilt = (r2 * approach).angle(&approach);
         let values = map.cell(cell);
         let depth_error = f64::from(values[NCH - 1]) - (t_obj.dot(&view.w) + rise);
         // A contact that no ray along the approach sees (an edge on a wall) is one the
-        // z-buffer cannot see either: the map's lever point is nowhere near it.
+        // z-buffer cannot see either: the map's lever point is nowhere near it. A face
+        // tilted against another is searched for where it rests on its rim.
+        let region = self
+            .centroid
+            .then(|| {
+                let phase = Xoshiro256PlusPlus::seed_from_u64(seed ^ (cell as u64).rotate_left(32));
+                self.region(&view, &b_pose, rise, tilt.tan(), phase, [a_range, b_range])
+            })
+            .flatten();
         let centroid_error = self.centroid.then(|| {
-            let phase = Xoshiro256PlusPlus::seed_from_u64(seed ^ (cell as u64).rotate_left(32));
-            let Some((centroid, height)) =
-                self.region(&view, &b_pose, rise, phase, [a_range, b_range])
-            else {
+            let Some((centroid, height)) = region else {
                 return f64::INFINITY;
             };
             let force = r1.inverse() * Vector3::new(values[0], values[1], values[2]).cast::<f64>();
@@ -285,15 +298,13 @@ impl<'a> Parts<'a> {
             let lever = view.project(&Point3::from(nearest + force * along));
             (lever[0] - centroid[0]).hypot(lever[1] - centroid[1])
         });
-        // Part B's face turned against part A's (both across the approach at rest).
-        let approach = Vector3::from(self.task.contact.approach);
-        let tilt = (r2 * approach).angle(&approach);
         Ok(CellCheck {
             cell,
             coords,
             depth_error,
             sampling: map.meta().pixel * tilt.tan(),
             centroid_error,
+            centroid: region.map(|(c, _)| c),
         })
     }
 
@@ -318,12 +329,14 @@ impl<'a> Parts<'a> {
     /// is not fine enough (few rays, or many on the region's edge: a crescent, a strip a
     /// few rays wide), again finer over the region itself, grown from them ray by ray (a
     /// thin crescent's centroid moves with its sampling, and its tips may be thinner than
-    /// the first rays' pitch).
+    /// the first rays' pitch). Where no first ray touches, from the rim contact's seeds
+    /// ([`Rays::rim_seeds`]; `slope`, the tangent of B's tilt against A).
     fn region(
         &self,
         view: &View,
         b_pose: &Isometry3<f64>,
         rise: f64,
+        slope: f64,
         mut phase: Xoshiro256PlusPlus,
         ranges: [[f64; 2]; 2],
     ) -> Option<([f64; 2], f64)> {
@@ -342,26 +355,24 @@ impl<'a> Parts<'a> {
             .depth
             .pixel
             .max(((hi[0] - lo[0]) * (hi[1] - lo[1]) / MAX_RAYS).sqrt());
-        let coarse = rays.scan(&Lattice::new(pitch, &mut phase))?;
-        let error = coarse.sampling_error();
-        if error < SAMPLING_SHARE * self.task.depth.pixel {
-            return Some(coarse.mean());
-        }
-        // Fine enough for half that error: the error goes as the square root of the rays
-        // on the edge (pitch^-1) over the rays (pitch^-2), so as pitch^1.5; at least REFINE
-        // times finer, and coarser again while the region holds more than MAX_FINE_RAYS.
-        let target = 0.5 * SAMPLING_SHARE * self.task.depth.pixel;
-        let mut fine = pitch * (target / error).powf(2.0 / 3.0).min(1.0 / REFINE);
-        loop {
-            let lattice = Lattice::new(fine, &mut phase);
-            match rays.flood(&lattice, &coarse.hits) {
-                // No ray of this lattice near the first ones touches: nothing finer to say.
-                Some(found) if found.hits.is_empty() => return Some(coarse.mean()),
-                Some(found) => return Some(found.mean()),
-                None => {}
+        let tolerance = self.task.depth.tolerance;
+        let lattice = Lattice::new(pitch, &mut phase);
+        let (seeds, error, first) = match rays.scan(&lattice, tolerance) {
+            Some(coarse) if coarse.sampling_error() < SAMPLING_SHARE * self.task.depth.pixel => {
+                return Some(coarse.mean());
             }
-            fine *= 2.0;
-        }
+            Some(coarse) => (coarse.clone(), coarse.sampling_error(), Some(coarse)),
+            // A face tilted against another rests on its rim, where the region within the
+            // tolerance is a sliver narrower than the pitch.
+            None => (
+                rays.rim_seeds(&lattice, tolerance + pitch * slope),
+                pitch,
+                None,
+            ),
+        };
+        // No ray of a finer lattice near the first ones touches: nothing finer to say.
+        let found = rays.refine(seeds, pitch, error, &mut phase).or(first);
+        found.map(|s| s.mean())
     }
 }
 
@@ -412,6 +423,7 @@ impl Lattice {
 }
 
 /// The rays one search found in contact.
+#[derive(Clone)]
 struct Scan {
     /// Each contact ray's (u, v) and A's height along w there.
     hits: Vec<([f64; 2], f64)>,
@@ -456,8 +468,8 @@ fn neighbours([i, j]: [i64; 2]) -> [[i64; 2]; 4] {
 
 impl Rays<'_> {
     /// A's height along w at (u, v) when the ray there meets both parts with a gap within
-    /// the contact tolerance.
-    fn height_at(&self, [u, v]: [f64; 2]) -> Option<f64> {
+    /// `tolerance`.
+    fn height_at(&self, [u, v]: [f64; 2], tolerance: f64) -> Option<f64> {
         let [lo, hi] = self.bounds;
         if u < lo[0] || u > hi[0] || v < lo[1] || v > hi[1] {
             return None;
@@ -481,11 +493,11 @@ impl Rays<'_> {
         )?;
         let h_a = a_range[0] - MARGIN + ta + self.rise;
         let h_b = b_range[1] + MARGIN - tb;
-        (h_a - h_b <= self.parts.task.depth.tolerance).then_some(h_a)
+        (h_a - h_b <= tolerance).then_some(h_a)
     }
 
-    /// The contact rays of `lattice` over A's box; `None` when no ray is in contact.
-    fn scan(&self, lattice: &Lattice) -> Option<Scan> {
+    /// The rays of `lattice` over A's box with a gap within `tolerance`; `None` when none.
+    fn scan(&self, lattice: &Lattice, tolerance: f64) -> Option<Scan> {
         let [lo, hi] = self.bounds;
         let corners = [lo, [hi[0], lo[1]], [lo[0], hi[1]], hi].map(|c| lattice.nearest(c));
         let range = |k: usize| {
@@ -497,7 +509,7 @@ impl Rays<'_> {
         let mut hit = BTreeMap::new();
         for i in range(0) {
             for j in range(1) {
-                if let Some(h) = self.height_at(lattice.at([i, j])) {
+                if let Some(h) = self.height_at(lattice.at([i, j]), tolerance) {
                     hit.insert([i, j], h);
                 }
             }
@@ -522,7 +534,7 @@ impl Rays<'_> {
                 Some(&(_, fewest)) if fewest <= misses => continue,
                 Some(&(touch, _)) => touch,
                 None if seen.len() as f64 >= MAX_FINE_RAYS => return None,
-                None => self.height_at(lattice.at(k)),
+                None => self.height_at(lattice.at(k), self.parts.task.depth.tolerance),
             };
             let misses = if touch.is_some() { 0 } else { misses + 1 };
             seen.insert(k, (touch, misses));
@@ -535,6 +547,70 @@ impl Rays<'_> {
             .filter_map(|(k, (touch, _))| Some((k, touch?)))
             .collect();
         Some(Scan::of(&hit, lattice))
+    }
+
+    /// Where to look for a rim's contact that no ray of `lattice` meets within the contact
+    /// tolerance: the point where the exact geometry puts the parts closest (A risen a
+    /// tolerance more), and the rays of `lattice` within `slack` (the tolerance plus a
+    /// pitch of the tilt's slope, which widens a second point contact's sliver to about a
+    /// pitch). Seeds only: their heights are not contact heights, and no edge is counted.
+    fn rim_seeds(&self, lattice: &Lattice, slack: f64) -> Scan {
+        let pair = &self.parts.pair;
+        let tolerance = self.parts.task.depth.tolerance;
+        let lifted = Isometry3::from(Translation3::from(self.view.w * (self.rise + tolerance)));
+        let closest =
+            query::closest_points(&lifted, &pair.a, self.b_pose, &pair.b, 2.0 * tolerance);
+        let mut hits = match closest {
+            Ok(ClosestPoints::WithinMargin(on_a, _)) => {
+                let [u, v, _] = self.view.project(&on_a);
+                vec![([u, v], 0.0)]
+            }
+            _ => Vec::new(),
+        };
+        if let Some(near) = self.scan(lattice, slack) {
+            hits.extend(near.hits);
+        }
+        Scan { hits, edge: 0 }
+    }
+
+    /// The contact region grown from `seeds` (found on a lattice of `pitch`, their
+    /// centroid good to about `error`) on finer lattices until its centroid is good to half
+    /// the [`SAMPLING_SHARE`] of a pixel, for at most [`SEARCHES`] lattices: each fine
+    /// enough for that were the error to go as pitch^1.5 (the rays on the edge, pitch^-1,
+    /// over the rays, pitch^-2; a sliver's, every ray on its edge, falls slower) and at
+    /// least [`REFINE`] times finer than the last; the first twice as coarse while it
+    /// would cast more than [`MAX_FINE_RAYS`], a later one not at all. `None` when no
+    /// finer lattice's ray touches.
+    fn refine(
+        &self,
+        mut seeds: Scan,
+        pitch: f64,
+        mut error: f64,
+        phase: &mut Xoshiro256PlusPlus,
+    ) -> Option<Scan> {
+        let target = 0.5 * SAMPLING_SHARE * self.parts.task.depth.pixel;
+        let (mut best, mut fine) = (None, pitch);
+        for _ in 0..SEARCHES {
+            let mut next = fine * (target / error).powf(2.0 / 3.0).min(1.0 / REFINE);
+            let found = loop {
+                match self.flood(&Lattice::new(next, phase), &seeds.hits) {
+                    Some(found) => break found,
+                    None if best.is_none() => next *= 2.0,
+                    None => return best,
+                }
+            };
+            if found.hits.is_empty() {
+                break;
+            }
+            error = found.sampling_error();
+            fine = next;
+            seeds = found.clone();
+            best = Some(found);
+            if error < target {
+                break;
+            }
+        }
+        best
     }
 }
 
