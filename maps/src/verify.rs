@@ -357,22 +357,24 @@ impl<'a> Parts<'a> {
             .max(((hi[0] - lo[0]) * (hi[1] - lo[1]) / MAX_RAYS).sqrt());
         let tolerance = self.task.depth.tolerance;
         let lattice = Lattice::new(pitch, &mut phase);
-        let (seeds, error, first) = match rays.scan(&lattice, tolerance) {
-            Some(coarse) if coarse.sampling_error() < SAMPLING_SHARE * self.task.depth.pixel => {
-                return Some(coarse.mean());
+        let coarse = rays.scan(&lattice, tolerance);
+        let found = match &coarse {
+            Some(c) => {
+                let error = c.sampling_error();
+                if error < SAMPLING_SHARE * self.task.depth.pixel {
+                    return Some(c.mean());
+                }
+                rays.refine(&c.hits, pitch, error, &mut phase)
             }
-            Some(coarse) => (coarse.clone(), coarse.sampling_error(), Some(coarse)),
             // A face tilted against another rests on its rim, where the region within the
             // tolerance is a sliver narrower than the pitch.
-            None => (
-                rays.rim_seeds(&lattice, tolerance + pitch * slope),
-                pitch,
-                None,
-            ),
+            None => {
+                let seeds = rays.rim_seeds(&lattice, tolerance + pitch * slope);
+                rays.refine(&seeds, pitch, pitch, &mut phase)
+            }
         };
         // No ray of a finer lattice near the first ones touches: nothing finer to say.
-        let found = rays.refine(seeds, pitch, error, &mut phase).or(first);
-        found.map(|s| s.mean())
+        found.or(coarse).map(|s| s.mean())
     }
 }
 
@@ -423,7 +425,6 @@ impl Lattice {
 }
 
 /// The rays one search found in contact.
-#[derive(Clone)]
 struct Scan {
     /// Each contact ray's (u, v) and A's height along w there.
     hits: Vec<([f64; 2], f64)>,
@@ -553,8 +554,8 @@ impl Rays<'_> {
     /// tolerance: the point where the exact geometry puts the parts closest (A risen a
     /// tolerance more), and the rays of `lattice` within `slack` (the tolerance plus a
     /// pitch of the tilt's slope, which widens a second point contact's sliver to about a
-    /// pitch). Seeds only: their heights are not contact heights, and no edge is counted.
-    fn rim_seeds(&self, lattice: &Lattice, slack: f64) -> Scan {
+    /// pitch). Seeds only: their heights are not contact heights.
+    fn rim_seeds(&self, lattice: &Lattice, slack: f64) -> Vec<([f64; 2], f64)> {
         let pair = &self.parts.pair;
         let tolerance = self.parts.task.depth.tolerance;
         let lifted = Isometry3::from(Translation3::from(self.view.w * (self.rise + tolerance)));
@@ -570,7 +571,7 @@ impl Rays<'_> {
         if let Some(near) = self.scan(lattice, slack) {
             hits.extend(near.hits);
         }
-        Scan { hits, edge: 0 }
+        hits
     }
 
     /// The contact region grown from `seeds` (found on a lattice of `pitch`, their
@@ -583,17 +584,18 @@ impl Rays<'_> {
     /// finer lattice's ray touches.
     fn refine(
         &self,
-        mut seeds: Scan,
+        seeds: &[([f64; 2], f64)],
         pitch: f64,
         mut error: f64,
         phase: &mut Xoshiro256PlusPlus,
     ) -> Option<Scan> {
         let target = 0.5 * SAMPLING_SHARE * self.parts.task.depth.pixel;
-        let (mut best, mut fine) = (None, pitch);
+        let (mut best, mut fine): (Option<Scan>, f64) = (None, pitch);
         for _ in 0..SEARCHES {
             let mut next = fine * (target / error).powf(2.0 / 3.0).min(1.0 / REFINE);
+            let from = best.as_ref().map_or(seeds, |b| &b.hits);
             let found = loop {
-                match self.flood(&Lattice::new(next, phase), &seeds.hits) {
+                match self.flood(&Lattice::new(next, phase), from) {
                     Some(found) => break found,
                     None if best.is_none() => next *= 2.0,
                     None => return best,
@@ -604,7 +606,6 @@ impl Rays<'_> {
             }
             error = found.sampling_error();
             fine = next;
-            seeds = found.clone();
             best = Some(found);
             if error < target {
                 break;

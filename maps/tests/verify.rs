@@ -156,14 +156,17 @@ fn the_exact_centroid_of_a_thin_crescent_is_the_closed_form_one() {
     }
 }
 
-/// Centroid (x, y) of the part of the regular polygon of `sides` vertices on radius `r`
-/// (the first at angle 0, as `ftmap cad` makes circles) where p . `d` >= `h` (m): the
-/// polygon clipped by a half-plane, by the shoelace formula.
+/// Vertex `k` (x, y) of the regular polygon of `sides` vertices on radius `r`, the first
+/// at angle 0, as `ftmap cad` makes circles.
+fn polygon_vertex(r: f64, sides: usize, k: usize) -> [f64; 2] {
+    let t = std::f64::consts::TAU * k as f64 / sides as f64;
+    [r * t.cos(), r * t.sin()]
+}
+
+/// Centroid (x, y) of the part of the polygon of [`polygon_vertex`] where p . `d` >= `h`
+/// (m): the polygon clipped by a half-plane, by the shoelace formula.
 fn clipped_polygon_centroid(r: f64, sides: usize, d: [f64; 2], h: f64) -> [f64; 2] {
-    let vertex = |k: usize| {
-        let t = std::f64::consts::TAU * k as f64 / sides as f64;
-        [r * t.cos(), r * t.sin()]
-    };
+    let vertex = |k: usize| polygon_vertex(r, sides, k);
     let beyond = |p: [f64; 2]| p[0] * d[0] + p[1] * d[1] - h;
     let mut kept = Vec::new();
     for k in 0..sides {
@@ -214,8 +217,8 @@ fn a_tilted_face_on_a_flat_rests_on_the_segment_of_its_rim_the_closed_form_gives
         let d = [-n.x / n.xy().norm(), -n.y / n.xy().norm()];
         let top = (0..sides)
             .map(|k| {
-                let t = std::f64::consts::TAU * k as f64 / sides as f64;
-                radius * (t.cos() * d[0] + t.sin() * d[1])
+                let [x, y] = polygon_vertex(radius, sides, k);
+                x * d[0] + y * d[1]
             })
             .fold(f64::NEG_INFINITY, f64::max);
         let want = clipped_polygon_centroid(radius, sides, d, top - tolerance / slope);
