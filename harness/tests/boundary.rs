@@ -16,17 +16,22 @@ const TOLERANCE: f64 = 10e-6;
 fn every_scene_stops_insertion_where_the_geometry_does() {
     let tasks = tasks_with_scenes().unwrap();
     assert_eq!(tasks.len(), 7);
-    for task in &tasks {
-        let mut sim = Sim::of_task(task).unwrap();
-        let found = boundaries(&mut sim, task, &directions(8)).unwrap();
-        assert!(found.worst() <= TOLERANCE, "{found}");
-        // The geometry's limit itself depends on the direction for the octagons only.
-        let limits: Vec<f64> = found.directions.iter().map(|b| b.geometric).collect();
-        let spread = limits.iter().fold(0.0f64, |m, &l| m.max(l))
-            - limits.iter().fold(1.0f64, |m, &l| m.min(l));
-        let octagon = matches!(task.geometry(), Ok(Geometry::OctagonPeg { .. }));
-        assert_eq!(spread > 1e-6, octagon, "{found}");
-    }
+    // A scene per thread: the bisections are independent.
+    std::thread::scope(|s| {
+        for task in &tasks {
+            s.spawn(move || {
+                let mut sim = Sim::of_task(task).unwrap();
+                let found = boundaries(&mut sim, task, &directions(8)).unwrap();
+                assert!(found.worst() <= TOLERANCE, "{found}");
+                // The geometry's limit itself depends on the direction for the octagons only.
+                let limits: Vec<f64> = found.directions.iter().map(|b| b.geometric).collect();
+                let spread = limits.iter().fold(0.0f64, |m, &l| m.max(l))
+                    - limits.iter().fold(1.0f64, |m, &l| m.min(l));
+                let octagon = matches!(task.geometry(), Ok(Geometry::OctagonPeg { .. }));
+                assert_eq!(spread > 1e-6, octagon, "{found}");
+            });
+        }
+    });
 }
 
 /// 45-degree chamfers widen the capture by how far the robot's stiff x/y servos yield to the

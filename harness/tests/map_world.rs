@@ -197,7 +197,7 @@ fn without_mismatch_the_spread_over_a_yaw_is_calibrated() {
     // 40 trials of x, y and yaw with twists, F/T noise, FMU defaults: the spread is not
     // too narrow (in MuJoCo, before its contacts were read once their torque had settled,
     // the truth lay within 2 sigma in 60 % of the measurements, NEES 8).
-    let (mut world, file, clearance) = octagon_yaw_world();
+    let (_, file, clearance) = octagon_yaw_world();
     let task = Task::find("octagon_yaw").expect("task octagon_yaw");
     let (map, _) = ftmap::map::format::load_any(&file).expect("the map loads");
     let fmu = Fmu::load(&default_fmu_path()).unwrap_or_else(|e| panic!("{e}"));
@@ -221,7 +221,8 @@ fn without_mismatch_the_spread_over_a_yaw_is_calibrated() {
         },
     };
     let truths = common::turned_truths(&task, 40, 5);
-    let results = run_campaign(&mut world, Some(&fmu), None, &cfg, &truths, 5).expect("runs");
+    let open = || Box::new(octagon_yaw_world().0) as Box<dyn World>;
+    let results = common::run_on_two(&open, &fmu, &cfg, &truths, 5);
     assert!(results.iter().all(|r| r.success), "every trial goes in");
     let measured = samples(&results);
     let c = Calibration::of(&measured);

@@ -6,7 +6,7 @@
 
 mod common;
 
-use harness::campaign::{Campaign, CampaignOptions, Offsets, run_campaign};
+use harness::campaign::{Campaign, CampaignOptions, Offsets};
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::{Noise, map_wrench};
 use harness::trial::{Strategy, TrialConfig, Twist};
@@ -182,7 +182,7 @@ fn the_centre_map_follows_the_polygons_where_the_map_s_grid_cannot() {
 fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
     // x, y and the yaw over its whole period, force only, twists under force once x, y are
     // within the capture (100 trials: docs/RESULTS.md).
-    let (task, mut sim) = common::scene("octagon_yaw");
+    let (task, _) = common::scene("octagon_yaw");
     let map = common::cached_map(&task);
     let (m, _) = ftmap::map::format::load_any(&map).expect("the map loads");
     let play = m.rotational_play(2);
@@ -212,7 +212,8 @@ fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
         },
     };
     let truths = common::turned_truths(&task, 5, 11);
-    let results = run_campaign(&mut sim, Some(&fmu), None, &cfg, &truths, 11).expect("runs");
+    let open = || Box::new(common::scene("octagon_yaw").1) as Box<dyn World>;
+    let results = common::run_on_two(&open, &fmu, &cfg, &truths, 11);
     for r in &results {
         assert!(
             r.success && r.contacts <= 15,
@@ -459,7 +460,7 @@ fn five_trials_on_the_tilted_hole_go_in_through_the_fmu() {
         "max_contacts": 30, "max_sim_time": null, "particles": null, "iterations": null,
         "sigma_torque": null, "sigma_force": null, "sigma_depth": null,
         "mismatch": null, "mismatch_angle": null, "measure_mismatch": false,
-        "lost": null, "world": "mujoco", "jobs": 1, "shard": null,
+        "lost": null, "world": "mujoco", "jobs": 2, "shard": null,
     }))
     .expect("options");
     let mut campaign = Campaign::open(options, &mut |_| {}).expect("the campaign opens");

@@ -123,8 +123,8 @@ const MAP_REVISION: u32 = 6;
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and
 /// [`MAP_REVISION`];
-/// computed and stored when missing or unreadable. Returns the file and whether it was
-/// computed now.
+/// computed and stored when missing or unreadable (once, when threads ask together).
+/// Returns the file and whether it was computed now.
 ///
 /// # Errors
 /// When the task's files cannot be read, the map cannot be computed or stored.
@@ -152,6 +152,11 @@ fn cached_as(computed: &Task, task: &Task, suffix: &str, dir: &Path) -> Result<(
         &[&MAP_REVISION.to_le_bytes(), suffix.as_bytes()],
     )?;
     let path = dir.join(format!("{}-{hash}{suffix}.ftmap", task.name));
+    // Threads of one process wanting a missing map wait for the first to compute it.
+    static COMPUTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _computing = COMPUTING
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     if path.is_file() && crate::map::format::load(&path).is_ok() {
         return Ok((path, false));
     }

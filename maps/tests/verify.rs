@@ -30,19 +30,21 @@ fn every_task_s_map_holds_the_exact_contact_height_and_mostly_its_centroid() {
     // micrometres apart in height puts the map's lever between them: on
     // peg_in_hole_4dof's tilts at 0.25 degrees, 89.5 % of 400 cells (81.75 % before the
     // verifier looked for rims no first ray meets).
+    // 40 cells of a turned map, 20 of a map of translations (the tight fit's crescents take
+    // a second a cell).
     for name in Task::names() {
         let (task, map, [a, b]) = computed(&name);
+        let turned = map.grid().axes().iter().any(|x| x.dof.is_rotation());
         let v = verify(
             &map,
             &task,
             [&a, &b],
             VerifyOptions {
-                samples: 40,
+                samples: if turned { 40 } else { 20 },
                 seed: 3,
             },
         )
         .expect("verifiable");
-        let turned = map.grid().axes().iter().any(|x| x.dof.is_rotation());
         let depth = if turned { 0.95 } else { REQUIRED_SHARE };
         assert!(
             v.depth_share() >= depth,
