@@ -17,9 +17,14 @@ out="$root/out/memcheck"
 rm -rf "$out" && mkdir -p "$out"
 tests=("$@")
 [ ${#tests[@]} -gt 0 ] || tests=(tests/test_fmu.py tests/test_fmu_vision.py)
+# The interpreter itself, not a version manager's shell shim: the shim's shell scripts and
+# ldconfig (ctypes' library search) are not traced, the Python processes (pytest, fmpy,
+# fmutool) are.
+python="$(python3 -c 'import sys; print(sys.executable)')"
 PYTHONMALLOC=malloc valgrind --tool=memcheck --leak-check=full --errors-for-leak-kinds=definite \
-    --trace-children=yes --child-silent-after-fork=yes --xml=yes --xml-file="$out/memcheck.%p.xml" \
-    python3 -m pytest -q -p no:cacheprovider "${tests[@]}"
+    --trace-children=yes --trace-children-skip='*/bash,*/sh,*/readlink,*/basename,*/ldconfig*' \
+    --child-silent-after-fork=yes --xml=yes --xml-file="$out/memcheck.%p.xml" \
+    "$python" -m pytest -q -p no:cacheprovider "${tests[@]}"
 python3 - "$out" <<'PY'
 import sys
 import xml.etree.ElementTree as ET

@@ -43,15 +43,18 @@ def cluster(scheduler, *args):
 
 def test_a_sharded_map_merges_into_the_single_machine_map(scheduler, tmp_path):
     # The peg with a tilt about x: shards split the rotation cells (3 here, over 4 shards:
-    # one shard is empty and must merge all the same).
+    # one shard is empty and must merge all the same). peg_in_hole's task, whose fit its
+    # [geometry] gives (peg_in_hole_4dof's is measured on the meshes, seconds in every
+    # shard's process).
     task = tmp_path / "task.toml"
-    text = (ROOT / "models_mjcf" / "peg_in_hole_4dof" / "task.toml").read_text()
-    text = (text.replace('"../peg_in_hole/', f'"{ROOT}/models_mjcf/peg_in_hole/')
-            .replace('object = ["x", "y", "rx", "ry"]', 'object = ["x", "y", "rx"]')
+    folder = ROOT / "models_mjcf" / "peg_in_hole"
+    text = (folder / "task.toml").read_text()
+    text = (text.replace('mesh = "', f'mesh = "{folder}/')
+            .replace('object = ["x", "y"]', 'object = ["x", "y", "rx"]')
             .replace("size_trans = 0.005", "size_trans = 0.001")
             .replace("delta_trans = 0.0001", "delta_trans = 0.0002")
-            .replace("size_rot = 0.03490658503988659", "size_rot = 0.008726646259971648")
-            .replace("delta_rot = 0.004363323129985824", "delta_rot = 0.008726646259971648"))
+            .replace("size_rot = 0.0\n", "size_rot = 0.008726646259971648\n"))
+    assert text.count("rx") == 1 and "size_rot = 0.0087" in text
     task.write_text(text)
     whole = tmp_path / "whole.ftmap"
     subprocess.run([str(FTMAP), "generate", "--task", str(task), "--out", str(whole)],

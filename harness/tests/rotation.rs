@@ -445,15 +445,16 @@ fn a_tilted_face_rests_on_the_edge_its_tilt_s_direction_gives_whatever_its_size(
 }
 
 #[test]
-fn five_trials_on_the_tilted_hole_go_in_through_the_fmu() {
+fn three_trials_on_the_tilted_hole_go_in_through_the_fmu() {
     // The committed task peg_in_hole_4dof as `harness trials --seed 21` runs it (its scene
     // written from its meshes on first use, its map computed from CAD): the hole within
     // ±5 mm and tilted within ±2 degrees, found and matched within 30 contacts in every
-    // trial (3-13 contacts when written).
+    // trial of the first three (3-13 contacts in the first five when written; half a
+    // minute of CPU a trial).
     let out = std::env::temp_dir().join(format!("ftfusion-tilted-{}", std::process::id()));
     let options: CampaignOptions = serde_json::from_value(serde_json::json!({
         "task": "peg_in_hole_4dof", "out": out, "seed": 21,
-        "offsets": Offsets::Random { trials: 5, half_width: None },
+        "offsets": Offsets::Random { trials: 3, half_width: None },
         "map": null, "vision": false, "vision_method": "Recalibration",
         "sigma_vision": null, "image_noise": 2.0, "detector": "Gradient",
         "strategy": "pf", "sensor_noise": true, "slide": true, "twist": true, "fmu": null,
@@ -476,7 +477,7 @@ fn five_trials_on_the_tilted_hole_go_in_through_the_fmu() {
             )
         })
         .collect();
-    assert_eq!(outcome.results.len(), 5);
+    assert_eq!(outcome.results.len(), 3);
     assert!(failed.is_empty(), "{failed:#?}");
     let _ = std::fs::remove_dir_all(&out);
 }
