@@ -6,7 +6,7 @@
 # PYTHONMALLOC=malloc so that its own allocator does not hide or fake errors; errors
 # outside FtFusion.so (the interpreter, NumPy) are counted apart and do not fail the run.
 # Usage: bash scripts/memcheck.sh [pytest arguments; default: the FMPy tests of the FMU,
-# tests/test_fmu.py and tests/test_fmu_vision.py, about 4 minutes on 2 cores]
+# tests/test_fmu.py and tests/test_fmu_vision.py, about a minute]
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
