@@ -57,7 +57,7 @@ fn a_peg_held_2_mm_off_centre_reads_the_lever_the_map_predicts() {
 
 #[test]
 fn five_trials_with_an_unknown_grip_go_in_through_the_fmu() {
-    let (task, _) = common::scene("peg_grip");
+    let task = ftmap::Task::find("peg_grip").expect("task peg_grip");
     let fmu = Fmu::load(&default_fmu_path()).unwrap_or_else(|e| panic!("{e}"));
     let most = 30;
     let cfg = TrialConfig {

@@ -197,8 +197,11 @@ fn without_mismatch_the_spread_over_a_yaw_is_calibrated() {
     // 40 trials of x, y and yaw with twists, F/T noise, FMU defaults: the spread is not
     // too narrow (in MuJoCo, before its contacts were read once their torque had settled,
     // the truth lay within 2 sigma in 60 % of the measurements, NEES 8).
-    let (_, file, clearance) = octagon_yaw_world();
     let task = Task::find("octagon_yaw").expect("task octagon_yaw");
+    let (file, clearance) = (
+        common::cached_map(&task),
+        task.fit().expect("fit").clearance(),
+    );
     let (map, _) = ftmap::map::format::load_any(&file).expect("the map loads");
     let fmu = Fmu::load(&default_fmu_path()).unwrap_or_else(|e| panic!("{e}"));
     let cfg = TrialConfig {

@@ -182,7 +182,7 @@ fn the_centre_map_follows_the_polygons_where_the_map_s_grid_cannot() {
 fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
     // x, y and the yaw over its whole period, force only, twists under force once x, y are
     // within the capture (100 trials: docs/RESULTS.md).
-    let (task, _) = common::scene("octagon_yaw");
+    let task = ftmap::Task::find("octagon_yaw").expect("task octagon_yaw");
     let map = common::cached_map(&task);
     let (m, _) = ftmap::map::format::load_any(&map).expect("the map loads");
     let play = m.rotational_play(2);
