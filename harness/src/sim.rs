@@ -4,7 +4,8 @@
 //! A contact motion starts from a reset state: the lift and the transfer to the next
 //! approach point happen in free space and are not simulated; the carriage is placed
 //! `APPROACH_CLEARANCE` above part B's top at the commanded (x, y) and the press motor
-//! pushes with the imposed force against the feed's damping, a slow guarded approach. When
+//! pushes with the imposed force against the feed's damping, a slow guarded approach.
+//! Heights are measured along part B's axis, in its frame (part B may be tilted). When
 //! part A has dropped into part B by [`ENTRY_DEPTH`], the feed drives it down at
 //! [`INSERTION_SPEED`], slowing down over the last [`INSERTION_TIME`] (its speed the height
 //! left over that time), until it settles on the goal under the imposed force (a tilted
@@ -220,21 +221,33 @@ impl Sim {
         d.mocap_pos_mut()[self.mocap] = [b[0], b[1], 0.0];
         let q = UnitQuaternion::from_scaled_axis(Vector3::from(self.object_rot));
         d.mocap_quat_mut()[self.mocap] = [q.w, q.i, q.j, q.k];
+        // Heights are part B's: the task frame's z in part B's frame, the height above its
+        // goal along its axis. On a tilted part B the top face's world height changes
+        // across it (0.35 mm over 10 mm at 2 degrees), more than the depth at which part A
+        // counts as having entered: read in the world, a press on the low side of the top
+        // started the feed, which drove part A into the top with 1000 N.
+        let origin = Vector3::new(b[0], b[1], 0.0);
+        let height = |p: [f64; 3]| q.inverse_transform_vector(&(Vector3::from(p) - origin)).z;
+        let axis_b = q * Vector3::z();
         // A tilted part A feeds along its own axis (the map's approach is the tool's): the
         // carriage's x, y follow its height by `lean`, so that `xy` is where the task frame
-        // meets the goal's height (z = 0; at the top it is `lean` times that height off);
-        // it starts higher by how far its face's edge dips.
+        // meets the goal's height (z = 0; at the top it is `lean` times that height off).
+        // It starts the approach clearance above part B's top plane, higher by how far its
+        // face's edge dips across that plane.
         let [ax, ay, az] = self.wrist_angles;
         let turn = Rotation3::from_euler_angles(ax, ay, az);
         let tool = turn * Vector3::z();
         let lean = lean(&turn);
         let tilted = lean != [0.0, 0.0];
-        let dip = if tilted {
-            self.spec.face.reach * tool.x.hypot(tool.y)
-        } else {
-            0.0
-        };
-        let start = [xy[0], xy[1], self.spec.top + APPROACH_CLEARANCE + dip];
+        let dip = self.spec.face.reach * axis_b.cross(&tool).norm();
+        let rise = self.spec.top + APPROACH_CLEARANCE + dip
+            - axis_b.x * (xy[0] - b[0])
+            - axis_b.y * (xy[1] - b[1]);
+        let start = [
+            xy[0],
+            xy[1],
+            rise / (axis_b.x * lean[0] + axis_b.y * lean[1] + axis_b.z),
+        ];
         let follow = |z: f64, k: usize| z * lean[k];
         let mut planned = xy;
         let start = [
@@ -274,8 +287,9 @@ impl Sim {
             d.step();
             steps += 1;
             let z = d.qpos()[self.qpos[2]];
-            if z < entered {
-                d.ctrl_mut()[self.actuators[3]] = -INSERTION_SPEED.min(z.max(0.0) / INSERTION_TIME);
+            let h = height(self.qpos.map(|k| d.qpos()[k]));
+            if h < entered {
+                d.ctrl_mut()[self.actuators[3]] = -INSERTION_SPEED.min(h.max(0.0) / INSERTION_TIME);
             }
             if tilted {
                 for (k, p) in planned.iter().enumerate() {
@@ -285,7 +299,7 @@ impl Sim {
             if let Some((to, speed, len, t0)) = sliding {
                 let done = ((steps - t0) as f64 * dt * speed / len).min(1.0);
                 let at = |k: usize, d: &MjData<Box<MjModel>>| d.qpos()[k];
-                if z < dropped {
+                if h < dropped {
                     // The edge dropped in: hold the carriage (and wrist) where part A is.
                     for (k, p) in planned.iter_mut().enumerate() {
                         let here = at(self.qpos[k], d);
@@ -334,7 +348,7 @@ impl Sim {
                 calm = 0;
             }
             if calm >= settle_steps {
-                if sweep.is_none() && z > entered {
+                if sweep.is_none() && h > entered {
                     let now = read(d);
                     let at_rest = *first.get_or_insert(now);
                     if at_rest.tcp[2] - z > DROP_DEPTH {
@@ -349,7 +363,7 @@ impl Sim {
                     first = Some(now);
                 }
                 match sweep.take() {
-                    Some(to) if z > entered => {
+                    Some(to) if h > entered => {
                         let (speed, len) = match to {
                             Sweep::Line(end) => {
                                 (SLIDE_SPEED, (end[0] - xy[0]).hypot(end[1] - xy[1]))
@@ -375,7 +389,7 @@ impl Sim {
             tcp,
             rot,
             settled,
-            inserted: settled && tcp[2] < SUCCESS_HEIGHT,
+            inserted: settled && height(tcp) < SUCCESS_HEIGHT,
             time,
         }
     }

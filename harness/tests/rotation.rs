@@ -244,6 +244,44 @@ fn a_peg_tilted_like_a_tilted_hole_goes_in_along_its_axis_and_an_upright_one_doe
     assert!(upright.settled && !upright.inserted, "upright: {upright:?}");
 }
 
+#[test]
+fn on_a_tilted_top_a_press_reads_the_imposed_force_and_a_slide_goes_its_whole_way() {
+    // Tilted by 2 degrees about x, part B's top lies 0.17 mm lower 5 mm towards -y than at
+    // its centre: lower than the depth at which part A counts as having entered the hole.
+    // Read in the world, such a press started the feed (1049 N along the tool, torques of
+    // 6 N.m) and a slide there stopped as if it had found the hole.
+    let (task, mut sim) = common::tilted();
+    let force = sim.spec().force;
+    let tilt = [2f64.to_radians(), 0.0, 0.0];
+    sim.set_object([0.0, 0.0]);
+    sim.set_object_rotation(tilt).expect("part B tilts");
+    for tcp in [tilt, [0.0; 3]] {
+        sim.set_tcp_rotation(tcp).expect("the wrist tilts");
+        for at in [[0.0, -0.005], [0.003, -0.007], [-0.004, 0.006]] {
+            let c = sim.contact_motion(at);
+            let f = map_wrench(c.raw);
+            let along = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+            assert!(c.settled && !c.inserted, "{at:?}, tcp {tcp:?}: {c:?}");
+            assert!(
+                (along - force).abs() < 0.02 * force,
+                "{at:?}, tcp {tcp:?}: |f| {along} N against the imposed {force} N"
+            );
+            let t = about_the_face(f, task.contact.sensor_origin[2]);
+            assert!(
+                t[3].hypot(t[4]) <= 1.1 * force * sim.spec().face.reach,
+                "{at:?}, tcp {tcp:?}: torque {t:?} beyond the face's reach"
+            );
+        }
+    }
+    let (from, to) = ([-0.003, -0.006], [0.003, -0.006]);
+    let slid = sim.slide_motion(from, to);
+    assert!(!slid.inserted, "{slid:?}");
+    assert!(
+        (slid.tcp[0] - to[0]).hypot(slid.tcp[1] - to[1]) < 1e-4,
+        "the slide from {from:?} stopped short of {to:?}: {slid:?}"
+    );
+}
+
 /// The wrench `w` (map convention) with its torque about the point of part A's face (the
 /// task frame's origin, approach -z) on the approach axis instead of the sensor, `height`
 /// above it: a force acting in the face has no torque across the approach about it.
