@@ -106,32 +106,13 @@ impl DepthBackend for CpuBackend {
             solid: solid_rows(a),
             normals: Normals::of(b, b_normals),
         };
-        // Shifts of one row offset share B's rows: batch them so that the sliding maxima of
-        // B's rows are computed once per batch.
-        let mut order: Vec<usize> = (0..shifts.len()).collect();
-        order.sort_by_key(|&k| (shifts[k].dv, shifts[k].du));
-        let batches: Vec<&[usize]> = order
-            .chunk_by(|&x, &y| shifts[x].dv == shifts[y].dv)
-            .flat_map(|g| g.chunks(BATCH))
-            .collect();
-        let mut done: Vec<(usize, ContactSummary)> = batches
+        let ranges = RowRanges::of(b, &rows.solid);
+        Ok(shifts
             .par_iter()
-            .flat_map_iter(|batch| {
-                let maxima = RowMaxima::new(a, b, &rows.solid, shifts[batch[0]].dv);
-                let mut scratch = Vec::new();
-                batch
-                    .iter()
-                    .map(|&k| {
-                        (
-                            k,
-                            summarize(a, b, &rows, &maxima, shifts[k], tolerance, &mut scratch),
-                        )
-                    })
-                    .collect::<Vec<_>>()
+            .map_init(Vec::new, |scratch, &s| {
+                summarize(a, b, &rows, &ranges, s, tolerance, scratch)
             })
-            .collect();
-        done.sort_unstable_by_key(|(k, _)| *k);
-        Ok(done.into_iter().map(|(_, summary)| summary).collect())
+            .collect())
     }
 }
 
@@ -387,82 +368,74 @@ fn solid_rows(a: &DepthImage) -> Vec<Option<Solid>> {
         .collect()
 }
 
-/// Shifts per batch that share the sliding maxima of B's rows.
-const BATCH: usize = 128;
-
-/// For one row offset of B against A: per solid row of A, the maximum of B's row over
-/// every window of the run's length (indexed by the window's first B column). Then the
-/// minimal gap of that row under a shift is the run's height minus one lookup; floats
-/// keep it exact, since h - b decreases monotonically in b.
-struct RowMaxima {
-    /// All rows' maxima, one after the other.
-    values: Vec<f32>,
-    /// Per A row, the range of `values` holding its maxima (empty when not solid).
-    ranges: Vec<std::ops::Range<usize>>,
+/// The greatest and least height of B's rows over windows of any length, in two lookups
+/// (sparse tables: per power of two 2^k, the maximum and minimum of every window of that
+/// length; a window is covered by its two overlapping power-of-two windows). A solid row
+/// of A under a shift has its minimal gap at the run's height minus the window's maximum
+/// (exact in floats: h - b decreases monotonically in b), and every pixel of the run in
+/// contact where the run's height minus the window's minimum is within the threshold.
+struct RowRanges<'b> {
+    /// B's width.
+    width: usize,
+    /// B's heights: the level of windows of one pixel.
+    heights: &'b [f32],
+    /// Level k >= 1 at k - 1: per row, at column c, the maximum and the minimum of columns
+    /// c..c + 2^k.
+    levels: Vec<[Vec<f32>; 2]>,
 }
 
-impl RowMaxima {
-    fn new(a: &DepthImage, b: &DepthImage, solid: &[Option<Solid>], dv: i64) -> Self {
-        let bw = b.window.width;
-        let off_row = a.window.j0 - dv - b.window.j0;
-        let mut values = Vec::with_capacity(solid.len() * bw);
-        let mut prefix = Vec::with_capacity(bw);
-        let ranges = solid
-            .iter()
-            .enumerate()
-            .map(|(r, s)| {
-                let start = values.len();
-                let row = s.and_then(|s| {
-                    let br = usize::try_from(r as i64 + off_row)
-                        .ok()
-                        .filter(|&br| br < b.window.height)?;
-                    Some((s.len, &b.height[br * bw..(br + 1) * bw]))
-                });
-                if let Some((len, row)) = row {
-                    sliding_max(row, len, &mut prefix, &mut values);
+impl<'b> RowRanges<'b> {
+    /// The tables of `b` up to the longest run of `solid`.
+    fn of(b: &'b DepthImage, solid: &[Option<Solid>]) -> Self {
+        let width = b.window.width;
+        let longest = solid.iter().flatten().map(|s| s.len).max().unwrap_or(0);
+        let mut ranges = Self {
+            width,
+            heights: &b.height,
+            levels: Vec::new(),
+        };
+        let mut span = 1;
+        while 2 * span <= longest.min(width) {
+            let [hi, lo] = ranges.level(ranges.levels.len());
+            let next = |prev: &[f32], pick: fn(f32, f32) -> f32| -> Vec<f32> {
+                let mut out = Vec::with_capacity(prev.len());
+                for row in prev.chunks_exact(width) {
+                    let (head, tail) = row.split_at(width - span);
+                    out.extend(head.iter().zip(&row[span..]).map(|(&x, &y)| pick(x, y)));
+                    out.extend_from_slice(tail);
                 }
-                start..values.len()
-            })
-            .collect();
-        Self { values, ranges }
+                out
+            };
+            let level = [next(hi, f32::max), next(lo, f32::min)];
+            ranges.levels.push(level);
+            span *= 2;
+        }
+        ranges
     }
 
-    /// The minimal gap of solid row `r` whose run starts at B column `bcol`, if known.
-    fn row_min(&self, solid: Option<Solid>, r: usize, bcol: i64) -> Option<f32> {
-        let s = solid?;
-        let at = usize::try_from(bcol).ok()?;
-        self.values[self.ranges[r].clone()]
-            .get(at)
-            .map(|m| s.height - m)
+    /// Level `k`'s maxima and minima.
+    fn level(&self, k: usize) -> [&[f32]; 2] {
+        match k.checked_sub(1) {
+            None => [self.heights, self.heights],
+            Some(i) => [&self.levels[i][0], &self.levels[i][1]],
+        }
     }
-}
 
-/// Appends to `out`, for every window `x[i..i + len]` inside `x`, its maximum (van Herk /
-/// Gil-Werman: running maxima forwards and backwards within blocks of `len`); `prefix`
-/// is scratch space.
-fn sliding_max(x: &[f32], len: usize, prefix: &mut Vec<f32>, out: &mut Vec<f32>) {
-    let n = x.len();
-    if len == 0 || len > n {
-        return;
+    /// The maximum and minimum of B's row `r` over columns `c..c + len` (`len` >= 1 within
+    /// the tables' lengths, the window inside the row).
+    fn window(&self, r: usize, c: usize, len: usize) -> [f32; 2] {
+        let k = len.ilog2() as usize;
+        let [hi, lo] = self.level(k);
+        let (i, j) = (r * self.width + c, r * self.width + c + len - (1 << k));
+        [hi[i].max(hi[j]), lo[i].min(lo[j])]
     }
-    prefix.clear();
-    prefix.extend_from_slice(x);
-    let base = out.len();
-    out.extend_from_slice(x);
-    let suffix = &mut out[base..];
-    for start in (0..n).step_by(len) {
-        let end = (start + len).min(n);
-        for i in start + 1..end {
-            prefix[i] = prefix[i].max(prefix[i - 1]);
-        }
-        for i in (start..end - 1).rev() {
-            suffix[i] = suffix[i].max(suffix[i + 1]);
-        }
+
+    /// The window of B's row `br` under solid run `s` starting at B column `bcol`, where the
+    /// run lies wholly within the row.
+    fn under(&self, s: Solid, br: usize, bcol: i64) -> Option<[f32; 2]> {
+        let c = usize::try_from(bcol).ok()?;
+        (s.len >= 1 && c + s.len <= self.width).then(|| self.window(br, c, s.len))
     }
-    for i in 0..=n - len {
-        suffix[i] = suffix[i].max(prefix[i + len - 1]);
-    }
-    out.truncate(base + n - len + 1);
 }
 
 /// What the contact reduction precomputes once per image pair.
@@ -473,54 +446,86 @@ struct Rows {
     normals: Normals,
 }
 
-/// The contact summary of one shift; `maxima` serve its solid rows, `scratch` holds the
-/// row minima.
+/// A row of A against B under one shift: its minimal gap, and for a solid row the least
+/// gap over its run (every pixel is in contact where that is within the threshold).
+#[derive(Clone, Copy)]
+struct RowGap {
+    pair: RowPair,
+    min: f32,
+    max: Option<f32>,
+}
+
+/// The contact summary of one shift; `ranges` serve its solid rows, `scratch` holds the
+/// rows' gaps.
 fn summarize(
     a: &DepthImage,
     b: &DepthImage,
     rows: &Rows,
-    maxima: &RowMaxima,
+    ranges: &RowRanges<'_>,
     s: Shift,
     tol: f32,
-    scratch: &mut Vec<(RowPair, f32)>,
+    scratch: &mut Vec<RowGap>,
 ) -> ContactSummary {
-    let (w, spans, bn) = (a.window.width, &rows.spans, &rows.normals.comp);
+    let (w, bw, spans, bn) = (
+        a.window.width,
+        b.window.width,
+        &rows.spans,
+        &rows.normals.comp,
+    );
     let off_col = a.window.i0 - s.du - b.window.i0;
     let mut gap = f32::INFINITY;
-    let row_min = scratch;
-    row_min.clear();
-    for p in row_pairs(a, b, spans, s) {
-        let n = p.c1 - p.c0 + 1;
-        let solid = rows.solid[p.r];
-        let m = match maxima.row_min(solid, p.r, solid.map_or(-1, |sd| sd.first as i64 + off_col)) {
-            Some(m) => m,
-            None => min_diff(
-                &a.height[p.r * w + p.c0..][..n],
-                &b.height[p.brow_start..][..n],
+    let gaps = scratch;
+    gaps.clear();
+    for pair in row_pairs(a, b, spans, s) {
+        let n = pair.c1 - pair.c0 + 1;
+        let solid = rows.solid[pair.r];
+        let window = solid.and_then(|sd| {
+            let [hi, lo] = ranges.under(sd, pair.brow_start / bw, sd.first as i64 + off_col)?;
+            Some([sd.height - hi, sd.height - lo])
+        });
+        let (min, max) = match window {
+            Some([min, max]) => (min, Some(max)),
+            None => (
+                min_diff(
+                    &a.height[pair.r * w + pair.c0..][..n],
+                    &b.height[pair.brow_start..][..n],
+                ),
+                None,
             ),
         };
-        gap = gap.min(m);
-        row_min.push((p, m));
+        gap = gap.min(min);
+        gaps.push(RowGap { pair, min, max });
     }
     let mut out = ContactSummary::none(gap);
     if !gap.is_finite() {
         return out;
     }
     let thr = gap + tol;
-    for &(p, m) in row_min.iter() {
-        if m > thr {
+    for &RowGap { pair: p, min, max } in gaps.iter() {
+        if min > thr {
             continue;
         }
         let n = p.c1 - p.c0 + 1;
         let bs = p.brow_start;
         let (av, bv) = (&a.height[p.r * w + p.c0..][..n], &b.height[bs..bs + n]);
         let nv = [&bn[0][bs..bs + n], &bn[1][bs..bs + n], &bn[2][bs..bs + n]];
-        let uniform = (
-            rows.flat[p.r],
-            rows.normals.row_uniform[bs / b.window.width],
-        );
-        let r = match uniform {
-            (Some(h), Some(normal)) => {
+        let uniform = (rows.flat[p.r], rows.normals.row_uniform[bs / bw]);
+        let r = match (uniform, rows.solid[p.r]) {
+            ((Some(h), Some(normal)), Some(sd)) if max.is_some_and(|m| m <= thr) => {
+                // The whole run touches: its sums in closed form (whole numbers, exact in
+                // f32 as the lanes' sums are).
+                let (first, count) = (sd.first as f32, sd.len as f32);
+                let last = first + count - 1.0;
+                RowSums {
+                    count,
+                    sum_col: (0.5 * f64::from(count) * f64::from(first + last)) as f32,
+                    sum_height: count * h,
+                    normal: normal.map(|c| c * count),
+                    first,
+                    last,
+                }
+            }
+            ((Some(h), Some(normal)), _) => {
                 let mut r = row_sums::<false>(av, bv, nv, thr, p.c0 as f32);
                 r.sum_height = r.count * h;
                 r.normal = normal.map(|c| c * r.count);
@@ -546,6 +551,7 @@ fn summarize(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::depth::PixelWindow;
 
     #[test]
     fn a_row_crossing_holds_every_point_of_the_triangle_on_that_row() {
@@ -586,27 +592,53 @@ mod tests {
     }
 
     #[test]
-    fn sliding_max_equals_the_direct_maximum_of_every_window() {
-        let x: Vec<f32> = (0..37)
+    fn row_ranges_equal_the_direct_maximum_and_minimum_of_every_window() {
+        let (width, height) = (37, 3);
+        let heights: Vec<f32> = (0..width * height)
             .map(|i| ((i * 7919) % 23) as f32 - if i % 5 == 0 { f32::INFINITY } else { 0.0 })
             .collect();
-        let mut prefix = Vec::new();
-        for len in 1..=x.len() {
-            let mut fast = vec![-1.0];
-            sliding_max(&x, len, &mut prefix, &mut fast);
-            assert_eq!(fast.remove(0), -1.0, "appends after what is there");
-            assert_eq!(fast.len(), x.len() - len + 1);
-            for (i, m) in fast.iter().enumerate() {
-                let direct = x[i..i + len]
-                    .iter()
-                    .copied()
-                    .fold(f32::NEG_INFINITY, f32::max);
-                assert_eq!(*m, direct, "window {i}..{} ", i + len);
+        let mut b = DepthImage::empty(
+            PixelWindow {
+                i0: 0,
+                j0: 0,
+                width,
+                height,
+            },
+            1.0,
+            Surface::Top,
+        );
+        b.height = heights.clone();
+        let solid = [Some(Solid {
+            height: 0.0,
+            first: 0,
+            len: width,
+        })];
+        let ranges = RowRanges::of(&b, &solid);
+        for r in 0..height {
+            let row = &heights[r * width..(r + 1) * width];
+            for len in 1..=width {
+                for c in 0..=width - len {
+                    let w = &row[c..c + len];
+                    let direct = [
+                        w.iter().copied().fold(f32::NEG_INFINITY, f32::max),
+                        w.iter().copied().fold(f32::INFINITY, f32::min),
+                    ];
+                    assert_eq!(
+                        ranges.window(r, c, len),
+                        direct,
+                        "row {r}, {c}..{}",
+                        c + len
+                    );
+                }
             }
         }
-        let mut none = Vec::new();
-        sliding_max(&x, 0, &mut prefix, &mut none);
-        sliding_max(&x, 38, &mut prefix, &mut none);
-        assert!(none.is_empty());
+        let run = |len| Solid {
+            height: 0.0,
+            first: 0,
+            len,
+        };
+        assert_eq!(ranges.under(run(10), 0, 28), None, "past the row's end");
+        assert_eq!(ranges.under(run(10), 0, -1), None, "before its start");
+        assert!(ranges.under(run(10), 0, 27).is_some());
     }
 }
