@@ -430,8 +430,8 @@ impl<'b> RowRanges<'b> {
         [hi[i].max(hi[j]), lo[i].min(lo[j])]
     }
 
-    /// The window of B's row `br` under solid run `s` starting at B column `bcol`, where the
-    /// run lies wholly within the row.
+    /// The maximum and minimum of B's row `br` under solid run `s` starting at B column
+    /// `bcol`, where the run lies wholly within the row.
     fn under(&self, s: Solid, br: usize, bcol: i64) -> Option<[f32; 2]> {
         let c = usize::try_from(bcol).ok()?;
         (s.len >= 1 && c + s.len <= self.width).then(|| self.window(br, c, s.len))
@@ -446,12 +446,14 @@ struct Rows {
     normals: Normals,
 }
 
-/// A row of A against B under one shift: its minimal gap, and for a solid row the least
-/// gap over its run (every pixel is in contact where that is within the threshold).
+/// A row of A against B under one shift.
 #[derive(Clone, Copy)]
 struct RowGap {
     pair: RowPair,
+    /// The row's least gap.
     min: f32,
+    /// For a solid row whose run lies within B's row, the greatest gap over the run: every
+    /// pixel of the run touches where that is within the threshold.
     max: Option<f32>,
 }
 
