@@ -434,7 +434,7 @@ impl<'b> RowRanges<'b> {
     /// `bcol`, where the run lies wholly within the row.
     fn under(&self, s: Solid, br: usize, bcol: i64) -> Option<[f32; 2]> {
         let c = usize::try_from(bcol).ok()?;
-        (s.len >= 1 && c + s.len <= self.width).then(|| self.window(br, c, s.len))
+        (c + s.len <= self.width).then(|| self.window(br, c, s.len))
     }
 }
 
