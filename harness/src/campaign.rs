@@ -371,7 +371,7 @@ impl Plan {
             Offsets::Random { trials, .. } => random_offsets(trials, size, self.options.seed),
             Offsets::Grid { points, .. } => grid_offsets(points, size),
         };
-        truths_at(&self.task, objects, self.options.seed)
+        truths_at(&self.task, objects, None, self.options.seed)
     }
 
     /// Writes `<out>/trials.csv`, `measurements.csv`, `first_images.csv` (with a camera: the
@@ -786,9 +786,11 @@ const MISMATCH_PRESSES: usize = 48;
 /// shards and workers alike).
 const MISMATCH_SEED: u64 = 0x6d69_7373;
 /// Revision of the measured misses' file: a cached file of another is measured again.
-const MISMATCH_REVISION: u32 = 2;
+const MISMATCH_REVISION: u32 = 3;
 /// Half width of the square near the goal whose true offsets stand for the later contacts,
-/// in the map's grid steps (a first contact leaves the estimate about a step off).
+/// in the map's grid steps (a first contact leaves the estimate about a step off); part B's
+/// rotations there lie within as many of their own steps of zero, as the TCP's do of part
+/// B's once it follows the estimate.
 const NEAR_STEPS: f64 = 2.0;
 
 /// Measures the scene's misses against the map the FMU reads ([`mismatch::measure`], cached
@@ -839,12 +841,12 @@ fn measure_mismatch(
                     return Ok(());
                 }
             };
-            let draw = |half_width: f64, seed: u64| {
+            let draw = |half_width: f64, near: Option<f64>, seed: u64| {
                 let objects = random_offsets(MISMATCH_PRESSES, half_width, seed);
-                truths_at(&plan.task, objects, seed)
+                truths_at(&plan.task, objects, near, seed)
             };
-            let omega = draw(plan.half_width(), MISMATCH_SEED);
-            let near = draw(NEAR_STEPS * step, MISMATCH_SEED ^ 1);
+            let omega = draw(plan.half_width(), None, MISMATCH_SEED);
+            let near = draw(NEAR_STEPS * step, Some(NEAR_STEPS), MISMATCH_SEED ^ 1);
             let misses = mismatch::measure(scene, &mut world, &omega, &near)?;
             create_dir(&maps_dir())?;
             let text =
@@ -1025,13 +1027,26 @@ const GRIP_STREAM: u64 = 0x6772_6970;
 const ROTATION_STREAM: u64 = 0x726f_7461;
 
 /// `n` rotation vectors (rad) from `seed`: on each of the grid's object rotation axes
-/// uniform over the axis's span (one whole period where it wraps), zero on the others.
-pub fn random_rotations(n: usize, axes: &[GridAxis], seed: u64) -> Vec<[f64; 3]> {
+/// uniform over the axis's span (one whole period where it wraps), or over the part of it
+/// within `within` of the axis's steps of zero where given; zero on the other axes.
+pub fn random_rotations(
+    n: usize,
+    axes: &[GridAxis],
+    within: Option<f64>,
+    seed: u64,
+) -> Vec<[f64; 3]> {
     let mut rng = StdRng::seed_from_u64(seed);
     let spans: Vec<(usize, f64, f64)> = axes
         .iter()
         .filter(|a| a.dof.pose == Pose::Object && a.dof.is_rotation())
-        .map(|a| (a.dof.axis.index() - 3, a.min, a.max()))
+        .map(|a| {
+            let reach = within.map_or(f64::INFINITY, |steps| steps * a.step);
+            (
+                a.dof.axis.index() - 3,
+                a.min.max(-reach),
+                a.max().min(reach),
+            )
+        })
         .collect();
     (0..n)
         .map(|_| {
@@ -1045,8 +1060,9 @@ pub fn random_rotations(n: usize, axes: &[GridAxis], seed: u64) -> Vec<[f64; 3]>
 }
 
 /// Each of the object offsets `objects` with a grip offset and a rotation of part B drawn
-/// from `seed` over what the task's grid leaves uncertain (none where it is certain).
-fn truths_at(task: &Task, objects: Vec<[f64; 2]>, seed: u64) -> Vec<Truth> {
+/// from `seed` over what the task's grid leaves uncertain (none where it is certain), the
+/// rotations within `near` of their steps of zero where given ([`random_rotations`]).
+fn truths_at(task: &Task, objects: Vec<[f64; 2]>, near: Option<f64>, seed: u64) -> Vec<Truth> {
     let axes = task.grid().map(|g| g.axes().to_vec()).unwrap_or_default();
     // The grid's own grip bound (the task's `size_grip`, its default resolved there).
     let grip_bound = axes
@@ -1057,7 +1073,7 @@ fn truths_at(task: &Task, objects: Vec<[f64; 2]>, seed: u64) -> Vec<Truth> {
         Some(bound) => random_offsets(objects.len(), bound, seed ^ GRIP_STREAM),
         None => vec![[0.0; 2]; objects.len()],
     };
-    let rotations = random_rotations(objects.len(), &axes, seed ^ ROTATION_STREAM);
+    let rotations = random_rotations(objects.len(), &axes, near, seed ^ ROTATION_STREAM);
     objects
         .into_iter()
         .zip(grips)

@@ -114,7 +114,8 @@ const TWIST_STEP: f64 = 3.5e-4;
 
 /// The FT-Map as the world: a contact reads the map's wrench at the object's pose relative
 /// to the TCP (interpolated over the cells where part A rests on part B), at the map's
-/// contact depth; part A goes in where the task's geometry says it does.
+/// contact depth; part A goes in where the task's geometry says it does (on a map of part
+/// B's tilts, where the map's cells say so).
 pub struct MapWorld {
     map: FtMap,
     /// The map's [`FtMap::contact_depth`].
@@ -125,21 +126,32 @@ pub struct MapWorld {
     /// The yaw's period, when the map's third axis is `object.rz` (2 pi where the fit has
     /// no symmetry about the approach).
     yaw_period: Option<f64>,
+    /// Whether the map's last two axes are `object.rx`, `object.ry`: part B tilts, and the
+    /// TCP stays upright (a tilted TCP moves the contact along its axis, which this world
+    /// does not follow).
+    tilted: bool,
+    /// On a map of tilts, the tilt below which the force and torque are read where the
+    /// tilt's direction meets this radius, as the FMU reads them by default (its
+    /// `tilt_floor`: the diagonal of the wider tilt step, docs/fmu.md); 0 otherwise.
+    tilt_floor: f64,
     object: [f64; 2],
     grip: [f64; 2],
     /// Part B's yaw and the TCP's (rad).
     yaw: [f64; 2],
+    /// Part B's tilt: its rotation vector's x and y (rad).
+    tilt: [f64; 2],
 }
 
 impl MapWorld {
     /// The world of `map` (over `object.x`, `object.y`, after `grip.x`, `grip.y` where the
-    /// grip is uncertain, or followed by `object.rz` where the fit answers at every yaw) for
-    /// parts that fit as `fit` says.
+    /// grip is uncertain, or followed by `object.rz` where the fit answers at every yaw, or
+    /// by `object.rx`, `object.ry`) for parts that fit as `fit` says.
     ///
     /// # Errors
     /// [`HarnessError::MapWorld`] when the map's axes are not exactly `object.x`, `object.y`,
-    /// `grip.x`, `grip.y`, `object.x`, `object.y` or `object.x`, `object.y`, `object.rz`, or
-    /// the last without a fit known at every yaw (a task without `[geometry]`).
+    /// `grip.x`, `grip.y`, `object.x`, `object.y`, `object.x`, `object.y`, `object.rz` or
+    /// `object.x`, `object.y`, `object.rx`, `object.ry`, or `object.rz` without a fit known
+    /// at every yaw (a task without `[geometry]`).
     pub fn new(map: FtMap, fit: Arc<dyn Fit>) -> Result<Self> {
         let is = |k: usize, pose, axis| {
             map.grid()
@@ -154,15 +166,19 @@ impl MapWorld {
             && object_at(2);
         let planar = map.grid().ndim() == 2 && object_at(0);
         let turned = map.grid().ndim() == 3 && object_at(0) && is(2, Pose::Object, Axis::Rz);
+        let tilted = map.grid().ndim() == 4
+            && object_at(0)
+            && is(2, Pose::Object, Axis::Rx)
+            && is(3, Pose::Object, Axis::Ry);
         if turned && fit.inserts_turned([0.0; 2], TWIST_STEP).is_none() {
             return Err(HarnessError::MapWorld(
                 "its object.rz needs the fit at every yaw, which only a task's [geometry] gives"
                     .into(),
             ));
         }
-        if !(has_grip || planar || turned) {
+        if !(has_grip || planar || turned || tilted) {
             return Err(HarnessError::MapWorld(format!(
-                "its axes are {}, the map world needs object.x, object.y, after grip.x, grip.y, before object.rz or alone",
+                "its axes are {}, the map world needs object.x, object.y, after grip.x, grip.y, before object.rz, before object.rx, object.ry or alone",
                 map.grid()
                     .axes()
                     .iter()
@@ -171,6 +187,12 @@ impl MapWorld {
                     .join(", ")
             )));
         }
+        let tilt_floor = if tilted {
+            let axes = map.grid().axes();
+            axes[2].step.max(axes[3].step) * std::f64::consts::SQRT_2
+        } else {
+            0.0
+        };
         let yaw_period = turned.then(|| {
             map.meta().symmetry.map_or(std::f64::consts::TAU, |n| {
                 std::f64::consts::TAU / f64::from(n)
@@ -182,9 +204,12 @@ impl MapWorld {
             fit,
             has_grip,
             yaw_period,
+            tilted,
+            tilt_floor,
             object: [0.0; 2],
             grip: [0.0; 2],
             yaw: [0.0; 2],
+            tilt: [0.0; 2],
         })
     }
 
@@ -209,8 +234,58 @@ impl MapWorld {
         }
     }
 
-    /// Whether part A goes in at `xy`.
+    /// The map's coordinates of a contact at `xy` (its axes were checked: they fit).
+    fn coords(&self, xy: [f64; 2]) -> Vec<f64> {
+        let (offset, yaw) = self.relative(xy);
+        match (self.has_grip, self.yaw_period, self.tilted) {
+            (true, ..) => vec![self.grip[0], self.grip[1], offset[0], offset[1]],
+            (false, Some(_), _) => vec![offset[0], offset[1], yaw],
+            // With the TCP upright, part B's tilt relative to it is its own.
+            (false, None, true) => vec![offset[0], offset[1], self.tilt[0], self.tilt[1]],
+            (false, None, false) => offset.to_vec(),
+        }
+    }
+
+    /// The map's coordinates at which to read the force and torque of a contact at
+    /// `coords` ([`MapWorld::coords`]): on a map of tilts, a tilt below the floor scaled
+    /// along its direction up to it, and no farther than the map's range on either axis;
+    /// elsewhere `coords` themselves.
+    fn wrench_coords(&self, coords: &[f64]) -> Vec<f64> {
+        let size = if self.tilted {
+            coords[2].hypot(coords[3])
+        } else {
+            0.0
+        };
+        if size == 0.0 || size >= self.tilt_floor {
+            return coords.to_vec();
+        }
+        let axes = self.map.grid().axes();
+        let mut scale = self.tilt_floor / size;
+        for k in [2, 3] {
+            let bound = if coords[k] > 0.0 {
+                axes[k].max()
+            } else {
+                axes[k].min
+            };
+            if coords[k] * scale / bound > 1.0 {
+                scale = bound / coords[k];
+            }
+        }
+        let mut out = coords.to_vec();
+        out[2] *= scale;
+        out[3] *= scale;
+        out
+    }
+
+    /// Whether part A goes in at `xy`: where the fit says, or on a map of tilts (which the
+    /// fit does not know) where most of the multilinear weight lies on inserted cells.
     fn goes_in(&self, xy: [f64; 2]) -> bool {
+        if self.tilted {
+            return self
+                .map
+                .inserted_share(&self.coords(xy), self.contact_depth)
+                .is_ok_and(|share| share > 0.5);
+        }
         let (offset, yaw) = self.relative(xy);
         // A fit known at zero yaw only serves maps without a yaw, where the yaw is zero.
         self.fit.inserts_turned(offset, yaw).unwrap_or(false)
@@ -219,18 +294,19 @@ impl MapWorld {
     /// The contact at `xy`: inserted (the task frame on the goal), or resting on part B
     /// with the map's wrench and depth.
     fn contact_at(&self, xy: [f64; 2]) -> Contact {
-        let (offset, yaw) = self.relative(xy);
         let inserted = self.goes_in(xy);
-        // The map's axes were checked: the coordinates fit its grid.
-        let coords = match (self.has_grip, self.yaw_period) {
-            (true, _) => vec![self.grip[0], self.grip[1], offset[0], offset[1]],
-            (false, Some(_)) => vec![offset[0], offset[1], yaw],
-            (false, None) => offset.to_vec(),
+        let coords = self.coords(xy);
+        let read = |at: &[f64]| {
+            self.map
+                .interpolate_contact(at, self.contact_depth)
+                .unwrap_or([0.0; NCH])
         };
-        let cell = self
-            .map
-            .interpolate_contact(&coords, self.contact_depth)
-            .unwrap_or([0.0; NCH]);
+        let at = self.wrench_coords(&coords);
+        let mut cell = read(&at);
+        if at != coords {
+            // The depth where the contact lies: it grows with the tilt's size.
+            cell[NCH - 1] = read(&coords)[NCH - 1];
+        }
         let mut raw = [0.0; 6];
         for (r, w) in raw.iter_mut().zip(&cell) {
             *r = -w;
@@ -256,14 +332,29 @@ impl World for MapWorld {
         self.grip = xy;
     }
 
-    /// A yaw on a map with `object.rz`; no rotation otherwise.
+    /// A yaw on a map with `object.rz`, a tilt on one with `object.rx`, `object.ry`; no
+    /// rotation otherwise.
     fn set_object_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
+        if self.tilted {
+            if rot[2] != 0.0 {
+                return Err(HarnessError::MapWorld(format!(
+                    "its map tilts part B about x and y only: part B cannot turn by {rot:?} rad"
+                )));
+            }
+            self.tilt = [rot[0], rot[1]];
+            return Ok(());
+        }
         self.yaw[0] = self.yaw_of("part B", rot)?;
         Ok(())
     }
 
-    /// As [`MapWorld::set_object_rotation`].
+    /// As [`MapWorld::set_object_rotation`]; upright only on a map of tilts.
     fn set_tcp_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
+        if self.tilted && rot != [0.0; 3] {
+            return Err(HarnessError::MapWorld(format!(
+                "it reads part B's tilts with the TCP upright only: the TCP cannot turn by {rot:?} rad"
+            )));
+        }
         self.yaw[1] = self.yaw_of("the TCP", rot)?;
         Ok(())
     }

@@ -4,7 +4,9 @@
 //! there, with no simulator mismatch, the FMU's defaults insert the peg in 2.5 contacts or
 //! fewer on average (issue 10's target). Over object.x, object.y and object.rz (the
 //! octagon's yaw) a contact reads the map at part B's pose relative to the turned TCP, a
-//! twist goes in at the yaw the geometry allows, and the FMU's spread is calibrated.
+//! twist goes in at the yaw the geometry allows, and the FMU's spread is calibrated. Over
+//! object.x, object.y, object.rx, object.ry (a tilted hole) a contact with the TCP upright
+//! reads the map at part B's tilt, as the FMU does below the tilt floor.
 
 mod common;
 
@@ -93,8 +95,10 @@ fn a_slide_drops_in_at_the_first_point_within_the_clearance() {
 
 #[test]
 fn a_map_over_other_axes_is_refused() {
+    // The tilted hole's x, y and rx without ry: a tilt about one axis alone.
     let task = Task::find("peg_in_hole_4dof").expect("task peg_in_hole_4dof");
-    let grid = task.grid().expect("its grid");
+    let axes = task.grid().expect("its grid").axes()[..3].to_vec();
+    let grid = ftmap::Grid::new(axes).expect("a grid");
     let meta = common::computed_peg_map().meta().clone();
     let map = ftmap::FtMap::zeros(grid, meta);
     let fit = Task::find("peg_in_hole")
@@ -239,5 +243,76 @@ fn without_mismatch_the_spread_over_a_yaw_is_calibrated() {
         "x, y within 2 sigma {:.3}, NEES {:.2}, yaw within 2 sigma {yaw:.3}",
         c.within_2sigma,
         c.nees_mean
+    );
+}
+
+#[test]
+fn on_a_map_of_tilts_part_b_s_tilt_is_read_with_the_tcp_upright_and_decides_the_fit() {
+    // The tilted hole's map (object.x, object.y, object.rx, object.ry): a press reads the
+    // map's contact at part B's tilt, at the map's depth; centred and untilted the peg goes
+    // in, tilted 2 degrees (beyond the 0.57 degrees that 0.1 mm of clearance over 10 mm
+    // allows) or 0.3 mm off it rests on the rim; a tilted TCP or a turned part B is refused
+    // by name.
+    let (task, _) = common::tilted_with_band(Some(2e-6));
+    let (map, _) =
+        ftmap::map::format::load_any(&common::cached_map(&task)).expect("the tilted map");
+    let mut world = MapWorld::new(map.clone(), task.fit().expect("a fit")).expect("a map world");
+    world.set_object([0.0, 0.0]);
+    world.set_object_rotation([0.0; 3]).expect("untilted");
+    assert!(
+        world.contact_motion([0.0, 0.0]).inserted,
+        "centred, untilted"
+    );
+    assert!(!world.contact_motion([3e-4, 0.0]).inserted, "0.3 mm off");
+    let tilt = 2f64.to_radians();
+    for rot in [[tilt, 0.0, 0.0], [0.0, -tilt, 0.0]] {
+        world.set_object_rotation(rot).expect("a tilt");
+        assert!(!world.contact_motion([0.0, 0.0]).inserted, "tilted {rot:?}");
+    }
+    let (object, tcp, rot) = ([0.0021, -0.0013], [0.0004, 0.0002], [0.012, -0.021, 0.0]);
+    world.set_object(object);
+    world.set_object_rotation(rot).expect("a tilt");
+    let m = world.contact_motion(tcp);
+    let at = [object[0] - tcp[0], object[1] - tcp[1], rot[0], rot[1]];
+    let expected = map
+        .interpolate_contact(&at, map.contact_depth())
+        .expect("in the grid");
+    let w = map_wrench(m.raw);
+    for k in 0..6 {
+        assert!((w[k] - expected[k]).abs() < 1e-9, "channel {k}: {w:?}");
+    }
+    assert!(!m.inserted && (m.tcp[2] - expected[6]).abs() < 1e-12);
+    // Below the diagonal of the tilt step (0.35 degrees) a face rests on the rim point its
+    // tilt's direction gives, whatever the tilt's size: the same wrench at 0.05 and 0.2
+    // degrees, that of the tilt at 0.5 degrees (beyond it) less the change of the lever.
+    let direction = [0.6f64, -0.8];
+    let wrench_at = |world: &mut MapWorld, degrees: f64| {
+        let t = degrees.to_radians();
+        world
+            .set_object_rotation([t * direction[0], t * direction[1], 0.0])
+            .expect("a tilt");
+        let m = world.contact_motion(tcp);
+        assert!(!m.inserted, "{degrees} degrees");
+        map_wrench(m.raw)
+    };
+    let (small, larger) = (wrench_at(&mut world, 0.05), wrench_at(&mut world, 0.2));
+    assert_eq!(small, larger);
+    let beyond = wrench_at(&mut world, 0.5);
+    let torque = |w: [f64; 6]| w[3].hypot(w[4]);
+    assert!(
+        small[3] * beyond[3] > 0.0 && small[4] * beyond[4] > 0.0,
+        "{small:?} {beyond:?}"
+    );
+    assert!((torque(small) - torque(beyond)).abs() < 0.1 * torque(beyond));
+    let refused = world
+        .set_tcp_rotation([0.01, 0.0, 0.0])
+        .expect_err("a tilted TCP");
+    assert!(refused.to_string().contains("upright"), "{refused}");
+    let refused = world
+        .set_object_rotation([0.0, 0.0, 0.1])
+        .expect_err("a yaw");
+    assert!(
+        refused.to_string().contains("about x and y only"),
+        "{refused}"
     );
 }

@@ -125,3 +125,39 @@ fn with_the_measured_mismatch_the_bearing_s_spread_tells_the_truth_in_mujoco() {
         c.nees_mean
     );
 }
+
+#[test]
+fn on_a_tilted_hole_the_map_world_reads_part_b_s_tilt_as_the_scene_does() {
+    // Presses with the TCP upright on part B tilted within Omega's ±2 degrees, over Omega
+    // and near the goal, as `--measure-mismatch` makes them: the map world reads the map at
+    // part B's tilt, the scene rests on its rim. A tilt read about the wrong axis or with
+    // the wrong sign would miss by the torque's whole size and by up to pi; the scene's
+    // own misses are a few percent and hundredths of a radian.
+    let (task, mut sim) = common::tilted_with_band(Some(2e-6));
+    let (map, _) = format::load_any(&common::cached_map(&task)).expect("the tilted map");
+    let mut world = MapWorld::new(map, task.fit().expect("a fit")).expect("a map world");
+    let tilted = |objects: Vec<[f64; 2]>, seed: u64| -> Vec<Truth> {
+        let tilts = random_offsets(objects.len(), task.omega.size_rot, seed);
+        objects
+            .into_iter()
+            .zip(tilts)
+            .map(|(object, t)| Truth {
+                object,
+                rot: [t[0], t[1], 0.0],
+                ..Truth::default()
+            })
+            .collect()
+    };
+    let omega = tilted(random_offsets(32, task.omega.size_trans, 7), 8);
+    let near = tilted(random_offsets(24, 2e-4, 9), 10);
+    let misses = measure(&mut sim, &mut world, &omega, &near).expect("presses");
+    assert!(
+        misses.omega.presses >= 24 && misses.near.presses >= 16,
+        "{misses}"
+    );
+    let pooled = misses.pooled();
+    assert!(
+        pooled.along > 0.0 && pooled.along < 0.15 && pooled.across < 0.15,
+        "{misses}"
+    );
+}

@@ -166,7 +166,12 @@ pub fn turned_truths(task: &Task, n: usize, seed: u64) -> Vec<harness::trial::Tr
     let grid = task.grid().expect("its grid");
     harness::campaign::random_offsets(n, task.omega.size_trans, seed)
         .into_iter()
-        .zip(harness::campaign::random_rotations(n, grid.axes(), seed))
+        .zip(harness::campaign::random_rotations(
+            n,
+            grid.axes(),
+            None,
+            seed,
+        ))
         .map(|(object, rot)| harness::trial::Truth {
             object,
             rot,

@@ -211,6 +211,16 @@ impl FtMap {
         }
     }
 
+    /// The share of the multilinear weight at `coords` on cells where part A went in (depth
+    /// below `contact_depth`, [`FtMap::contact_depth`]): above a half, the map says part A
+    /// goes in there; 0 on a map without depths.
+    pub fn inserted_share(&self, coords: &[f64], contact_depth: Option<f32>) -> Result<f64> {
+        let Some(middle) = contact_depth else {
+            return Ok(0.0);
+        };
+        Ok(self.interpolate_over(coords, |c| c[NCH - 1] < middle)?.1)
+    }
+
     /// Multilinear interpolation at `coords` over the corners `keep` accepts, renormalised
     /// over them, and the sum of their weights (zeros and 0 when it accepts none).
     fn interpolate_over(
