@@ -126,14 +126,12 @@ pub struct MapWorld {
     /// The yaw's period, when the map's third axis is `object.rz` (2 pi where the fit has
     /// no symmetry about the approach).
     yaw_period: Option<f64>,
-    /// Whether the map's last two axes are `object.rx`, `object.ry`: part B tilts, and the
-    /// TCP stays upright (a tilted TCP moves the contact along its axis, which this world
-    /// does not follow).
-    tilted: bool,
-    /// On a map of tilts, the tilt below which the force and torque are read where the
-    /// tilt's direction meets this radius, as the FMU reads them by default (its
-    /// `tilt_floor`: the diagonal of the wider tilt step, docs/fmu.md); 0 otherwise.
-    tilt_floor: f64,
+    /// Where the map's last two axes are `object.rx`, `object.ry` (part B tilts, and the TCP
+    /// stays upright: a tilted TCP moves the contact along its axis, which this world does
+    /// not follow), the tilt below which the force and torque are read where the tilt's
+    /// direction meets this radius, as the FMU reads them by default (its `tilt_floor`: the
+    /// diagonal of the wider tilt step, docs/fmu.md).
+    tilt_floor: Option<f64>,
     object: [f64; 2],
     grip: [f64; 2],
     /// Part B's yaw and the TCP's (rad).
@@ -187,12 +185,10 @@ impl MapWorld {
                     .join(", ")
             )));
         }
-        let tilt_floor = if tilted {
+        let tilt_floor = tilted.then(|| {
             let axes = map.grid().axes();
             axes[2].step.max(axes[3].step) * std::f64::consts::SQRT_2
-        } else {
-            0.0
-        };
+        });
         let yaw_period = turned.then(|| {
             map.meta().symmetry.map_or(std::f64::consts::TAU, |n| {
                 std::f64::consts::TAU / f64::from(n)
@@ -204,7 +200,6 @@ impl MapWorld {
             fit,
             has_grip,
             yaw_period,
-            tilted,
             tilt_floor,
             object: [0.0; 2],
             grip: [0.0; 2],
@@ -237,7 +232,7 @@ impl MapWorld {
     /// The map's coordinates of a contact at `xy` (its axes were checked: they fit).
     fn coords(&self, xy: [f64; 2]) -> Vec<f64> {
         let (offset, yaw) = self.relative(xy);
-        match (self.has_grip, self.yaw_period, self.tilted) {
+        match (self.has_grip, self.yaw_period, self.tilt_floor.is_some()) {
             (true, ..) => vec![self.grip[0], self.grip[1], offset[0], offset[1]],
             (false, Some(_), _) => vec![offset[0], offset[1], yaw],
             // With the TCP upright, part B's tilt relative to it is its own.
@@ -251,16 +246,15 @@ impl MapWorld {
     /// along its direction up to it, and no farther than the map's range on either axis;
     /// elsewhere `coords` themselves.
     fn wrench_coords(&self, coords: &[f64]) -> Vec<f64> {
-        let size = if self.tilted {
-            coords[2].hypot(coords[3])
-        } else {
-            0.0
+        let Some(floor) = self.tilt_floor else {
+            return coords.to_vec();
         };
-        if size == 0.0 || size >= self.tilt_floor {
+        let size = coords[2].hypot(coords[3]);
+        if size == 0.0 || size >= floor {
             return coords.to_vec();
         }
         let axes = self.map.grid().axes();
-        let mut scale = self.tilt_floor / size;
+        let mut scale = floor / size;
         for k in [2, 3] {
             let bound = if coords[k] > 0.0 {
                 axes[k].max()
@@ -280,7 +274,7 @@ impl MapWorld {
     /// Whether part A goes in at `xy`: where the fit says, or on a map of tilts (which the
     /// fit does not know) where most of the multilinear weight lies on inserted cells.
     fn goes_in(&self, xy: [f64; 2]) -> bool {
-        if self.tilted {
+        if self.tilt_floor.is_some() {
             return self
                 .map
                 .inserted_share(&self.coords(xy), self.contact_depth)
@@ -335,7 +329,7 @@ impl World for MapWorld {
     /// A yaw on a map with `object.rz`, a tilt on one with `object.rx`, `object.ry`; no
     /// rotation otherwise.
     fn set_object_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
-        if self.tilted {
+        if self.tilt_floor.is_some() {
             if rot[2] != 0.0 {
                 return Err(HarnessError::MapWorld(format!(
                     "its map tilts part B about x and y only: part B cannot turn by {rot:?} rad"
@@ -350,7 +344,7 @@ impl World for MapWorld {
 
     /// As [`MapWorld::set_object_rotation`]; upright only on a map of tilts.
     fn set_tcp_rotation(&mut self, rot: [f64; 3]) -> Result<()> {
-        if self.tilted && rot != [0.0; 3] {
+        if self.tilt_floor.is_some() && rot != [0.0; 3] {
             return Err(HarnessError::MapWorld(format!(
                 "it reads part B's tilts with the TCP upright only: the TCP cannot turn by {rot:?} rad"
             )));

@@ -16,7 +16,20 @@ use harness::campaign::{random_offsets, run_campaign};
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::{Noise, map_wrench};
 use harness::trial::{Strategy, TrialConfig, Truth, Twist};
-use harness::world::{MapWorld, World};
+use harness::world::{Contact, MapWorld, World};
+
+/// Asserts that contact `m` read the force and torque of `map`'s contact at `at`; that
+/// contact's channels.
+fn reads_the_contact_at(map: &ftmap::FtMap, m: &Contact, at: &[f64]) -> [f64; ftmap::NCH] {
+    let expected = map
+        .interpolate_contact(at, map.contact_depth())
+        .expect("in the grid");
+    let w = map_wrench(m.raw);
+    for k in 0..6 {
+        assert!((w[k] - expected[k]).abs() < 1e-9, "channel {k}: {w:?}");
+    }
+    expected
+}
 
 fn peg_world() -> (MapWorld, f64) {
     let task = Task::find("peg_in_hole").expect("task peg_in_hole");
@@ -176,13 +189,7 @@ fn a_turned_contact_reads_the_map_at_the_relative_pose_and_a_twist_goes_in() {
     let (s, c) = tcp_yaw.sin_cos();
     let d = [object[0] - tcp[0], object[1] - tcp[1]];
     let relative = [c * d[0] + s * d[1], c * d[1] - s * d[0], yaw - tcp_yaw];
-    let expected = map
-        .interpolate_contact(&relative, map.contact_depth())
-        .expect("in the grid");
-    let w = map_wrench(m.raw);
-    for k in 0..6 {
-        assert!((w[k] - expected[k]).abs() < 1e-9, "channel {k}: {w:?}");
-    }
+    reads_the_contact_at(&map, &m, &relative);
     assert!((m.rot[2] - tcp_yaw).abs() < 1e-12, "{m:?}");
     // Over the hole but 6 degrees off: out. A twist through the period goes in within
     // the octagon's 0.70 degrees of play, an eighth of a turn from part B's yaw at most.
@@ -274,13 +281,7 @@ fn on_a_map_of_tilts_part_b_s_tilt_is_read_with_the_tcp_upright_and_decides_the_
     world.set_object_rotation(rot).expect("a tilt");
     let m = world.contact_motion(tcp);
     let at = [object[0] - tcp[0], object[1] - tcp[1], rot[0], rot[1]];
-    let expected = map
-        .interpolate_contact(&at, map.contact_depth())
-        .expect("in the grid");
-    let w = map_wrench(m.raw);
-    for k in 0..6 {
-        assert!((w[k] - expected[k]).abs() < 1e-9, "channel {k}: {w:?}");
-    }
+    let expected = reads_the_contact_at(&map, &m, &at);
     assert!(!m.inserted && (m.tcp[2] - expected[6]).abs() < 1e-12);
     // Below the diagonal of the tilt step (0.35 degrees) a face rests on the rim point its
     // tilt's direction gives, whatever the tilt's size: the same wrench at 0.05 and 0.2
