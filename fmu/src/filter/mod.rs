@@ -199,7 +199,10 @@ pub struct Filter {
 /// Buffers reused by every update (no allocation per iteration).
 #[derive(Debug, Clone, Default)]
 struct Scratch {
+    /// Each particle's log-likelihood of the measurement being taken, at its pose.
     ll: Vec<f32>,
+    /// The moves' proposals' log-likelihoods.
+    proposed: Vec<f32>,
     w: Vec<f32>,
     pos: Vec<f32>,
     /// The particles' map coordinates relative to the TCP.
@@ -248,6 +251,7 @@ impl Filter {
             estimate: Estimate::default(),
             scratch: Scratch {
                 ll: vec![0.0; n],
+                proposed: vec![0.0; n],
                 w: vec![0.0; n],
                 pos: vec![0.0; n * d],
                 rel: vec![0.0; n * d],
@@ -366,7 +370,7 @@ impl Filter {
         }
     }
 
-    /// Takes one measurement: `iterations` rounds of jitter (not before the filter's first
+    /// Takes one measurement: `iterations` rounds of a move (not before the filter's first
     /// weighing), weight (Eq. 3), normalise and resample (when ESS <= N/2), then a new
     /// estimate. A measurement with a non-finite value is refused and changes nothing; an
     /// image alone that cannot be used changes nothing either.
@@ -383,18 +387,47 @@ impl Filter {
         if m.vision_only && vision.is_none() {
             return Ok(report);
         }
+        let evidence = self.evidence(m, vision);
+        if self.measurements > 0 && self.cfg.lost > 0.0 {
+            report.relocated = self.relocate(&evidence);
+        }
+        let iterations = self.cfg.iterations;
+        for it in 0..iterations {
+            // Condensation order: predict (move) before each weighing but the very first, so
+            // that the estimate below reads the weighed set (Algorithm 1, step 13), not the
+            // set moved for the next iteration. The move's target is the set as weighed so
+            // far: none of this measurement's likelihood in its first iteration.
+            if it > 0 || self.measurements > 0 {
+                self.mutate(&evidence, it as f32 / iterations as f32);
+            } else {
+                self.evaluate(&evidence);
+            }
+            let ess = self.weigh(&evidence, &mut report);
+            if ess <= self.cfg.particles as f64 / 2.0 {
+                self.resample();
+                report.resampled += 1;
+            }
+        }
+        self.measurements += 1;
+        self.estimate = Estimate::compute(&self.lookup, &self.cfg, &self.pos, &self.lw);
+        Ok(report)
+    }
+
+    /// What measurement `m` (checked; `vision`, its image prepared) offers the particles:
+    /// the channels it weighs and how, and what it says of the fit's clearance.
+    fn evidence(&self, m: &Measurement, vision: Option<Prepared>) -> Evidence {
         let c = &self.cfg;
         let height = self.lookup.height(&m.tcp);
-        // A contact that did not go in is a negative contact where the map allows one; it
-        // replaces the depth channel then, unless part A rests measurably below part B's top
-        // (on a chamfer: how far down says how far off), where both count.
-        let negative = self
-            .negative
-            .as_ref()
-            .filter(|_| !m.vision_only && !self.lookup.inserted(height));
+        let went_in = self.lookup.inserted(height);
+        // A contact says where part B is against the fit's clearance where the map allows
+        // it (module `negative`); it replaces the depth channel then, unless it did not go
+        // in and part A rests measurably below part B's top (on a chamfer: how far down
+        // says how far off), where both count.
+        let contact = self.negative.as_ref().filter(|_| !m.vision_only);
         let use_depth = c.sigma_depth > 0.0
             && self.lookup.has_depth()
-            && (negative.is_none() || self.lookup.below_top(height, 2.0 * c.sigma_depth));
+            && (contact.is_none()
+                || (!went_in && self.lookup.below_top(height, 2.0 * c.sigma_depth)));
         let wrench = self.lookup.compared(m.wrench);
         let mut meas = [0.0f32; LANES];
         for (dst, &src) in meas.iter_mut().zip(&wrench) {
@@ -438,10 +471,10 @@ impl Filter {
             ..Weights::default()
         }
         .student(c.tail as f32);
-        let evidence = Evidence {
+        Evidence {
             // Where the tool's axis met the goal's height, at the end and (at the end's
             // height and tilt) at the start.
-            negative: negative.map(|n| {
+            fit: contact.map(|n| {
                 let at = |x: f64, y: f64, rz: f64| {
                     let [fx, fy] = self
                         .lookup
@@ -450,50 +483,43 @@ impl Filter {
                 };
                 let end = at(m.tcp[0], m.tcp[1], m.tcp[5]);
                 let start = m.slide_start.map_or(end, |s| at(s[0], s[1], s[2]));
-                (n.clone(), start, end)
+                Fit {
+                    term: n.clone(),
+                    start,
+                    end,
+                    went_in,
+                }
             }),
             tcp: m.tcp,
             weights,
             force: !m.vision_only,
             vision,
-        };
-        if self.measurements > 0 && c.lost > 0.0 {
-            report.relocated = self.relocate(&evidence);
         }
-        for it in 0..self.cfg.iterations {
-            // Condensation order: predict (jitter) before each weighing but the very first,
-            // so that the estimate below reads the weighed set (Algorithm 1, step 13), not
-            // the set diffused for the next iteration.
-            if it > 0 || self.measurements > 0 {
-                self.jitter();
-            }
-            let ess = self.weigh(&evidence, &mut report);
-            if ess <= self.cfg.particles as f64 / 2.0 {
-                self.resample();
-                report.resampled += 1;
-            }
-        }
-        self.measurements += 1;
-        self.estimate = Estimate::compute(&self.lookup, &self.cfg, &self.pos, &self.lw);
-        Ok(report)
     }
 
-    /// Each particle's log-likelihood of `ev` (Eq. 3: map residuals, image residuals) into
-    /// `ll`; `rel` and `heights` receive the particles' map coordinates and contact
-    /// heights ([`Lookup::relative`]).
+    /// The log-likelihood of `ev` (Eq. 3: map residuals, image residuals) of each particle
+    /// pose of `pos` (axis-major) into `ll`; `rel` and `heights` receive the poses' map
+    /// coordinates and contact heights ([`Lookup::relative`]).
     fn log_likelihood(
         &self,
         ev: &Evidence,
+        pos: &[f32],
         rel: &mut [f32],
         heights: &mut Vec<f32>,
         ll: &mut [f32],
     ) {
         if ev.force {
-            self.lookup.relative(&self.pos, &ev.tcp, rel, heights);
+            self.lookup.relative(pos, &ev.tcp, rel, heights);
             self.lookup
                 .log_likelihood(self.cfg.interpolation, rel, heights, &ev.weights, ll);
-            if let Some((negative, from, to)) = &ev.negative {
-                negative.add_log_likelihood(&self.pos, rel, *from, *to, ll);
+            match &ev.fit {
+                Some(fit) if fit.went_in => {
+                    fit.term.add_went_in_log_likelihood(pos, rel, fit.end, ll);
+                }
+                Some(fit) => fit
+                    .term
+                    .add_log_likelihood(pos, rel, fit.start, fit.end, ll),
+                None => {}
             }
         } else {
             ll.fill(0.0);
@@ -501,8 +527,54 @@ impl Filter {
         if let (Some(sense), Some(p)) = (&self.vision, &ev.vision) {
             let n = self.cfg.particles;
             let axes = self.lookup.axes();
-            sense.add_log_likelihood(p, n, |k, i| axes[k].value(self.pos[k * n + i]), ll);
+            sense.add_log_likelihood(p, n, |k, i| axes[k].value(pos[k * n + i]), ll);
         }
+    }
+
+    /// Each particle's log-likelihood of `ev` at its pose, into `scratch.ll`.
+    fn evaluate(&mut self, ev: &Evidence) {
+        let mut ll = std::mem::take(&mut self.scratch.ll);
+        let mut rel = std::mem::take(&mut self.scratch.rel);
+        let mut heights = std::mem::take(&mut self.scratch.heights);
+        self.log_likelihood(ev, &self.pos, &mut rel, &mut heights, &mut ll);
+        self.scratch.ll = ll;
+        self.scratch.rel = rel;
+        self.scratch.heights = heights;
+    }
+
+    /// The move (the prediction of the condensation loop) as a Metropolis-Hastings step:
+    /// every particle proposes its pose plus the jitter ([`Filter::jitter`], a symmetric
+    /// proposal) and takes it with probability min(1, (L(proposal) / L(pose))^`beta`), L
+    /// the likelihood of `ev`; `scratch.ll` follows the poses. The target is the set's own
+    /// density, flat over a jitter step, times the `beta` share of the measurement weighed
+    /// so far: across a narrow ridge of the likelihood a move off it is refused, where a
+    /// plain jitter would lose that particle at the next weighing and so thin the ridge's
+    /// weight against a broad one's. With `beta` 0 every proposal is taken.
+    fn mutate(&mut self, ev: &Evidence, beta: f32) {
+        let n = self.cfg.particles;
+        let mut proposal = std::mem::take(&mut self.scratch.pos);
+        proposal.copy_from_slice(&self.pos);
+        self.jitter(&mut proposal);
+        let mut proposed = std::mem::take(&mut self.scratch.proposed);
+        let mut rel = std::mem::take(&mut self.scratch.rel);
+        let mut heights = std::mem::take(&mut self.scratch.heights);
+        self.log_likelihood(ev, &proposal, &mut rel, &mut heights, &mut proposed);
+        let ll = &mut self.scratch.ll;
+        for i in 0..n {
+            let gain = beta * (proposed[i] - ll[i]);
+            // A NaN gain (no finite likelihood either way) keeps the pose.
+            let take = beta == 0.0 || gain >= 0.0 || unit::<f32>(&mut self.rng).ln() < gain;
+            if take {
+                for k in 0..self.lookup.ndim() {
+                    self.pos[k * n + i] = proposal[k * n + i];
+                }
+                ll[i] = proposed[i];
+            }
+        }
+        self.scratch.pos = proposal;
+        self.scratch.proposed = proposed;
+        self.scratch.rel = rel;
+        self.scratch.heights = heights;
     }
 
     /// Relocation (sensor resetting, decided by Bayes): the prior for a measurement is
@@ -533,7 +605,7 @@ impl Filter {
         let mut ll = std::mem::take(&mut self.scratch.ll);
         let mut rel = std::mem::take(&mut self.scratch.rel);
         let mut heights = std::mem::take(&mut self.scratch.heights);
-        self.log_likelihood(ev, &mut rel, &mut heights, &mut ll);
+        self.log_likelihood(ev, &self.pos, &mut rel, &mut heights, &mut ll);
         let is_probe = |i: usize| i >= offset && (i - offset).is_multiple_of(PROBE_EVERY);
         let set = log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i] + ll[i]))
             - log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i]));
@@ -583,37 +655,36 @@ impl Filter {
         count
     }
 
-    /// Multiplies the weights by the likelihood and normalises (log-sum-exp); re-spreads a
-    /// share of the particles when every likelihood underflows. Returns the ESS and leaves
-    /// the linear weights in `scratch.w`.
+    /// Multiplies the weights by the likelihood (`scratch.ll`) and normalises
+    /// (log-sum-exp); re-spreads a share of the particles when every likelihood underflows.
+    /// Returns the ESS and leaves the linear weights in `scratch.w`.
     fn weigh(&mut self, ev: &Evidence, report: &mut Report) -> f64 {
-        let mut ll = std::mem::take(&mut self.scratch.ll);
-        let mut rel = std::mem::take(&mut self.scratch.rel);
-        let mut heights = std::mem::take(&mut self.scratch.heights);
-        self.log_likelihood(ev, &mut rel, &mut heights, &mut ll);
-        let best = ll.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let best = self
+            .scratch
+            .ll
+            .iter()
+            .copied()
+            .fold(f32::NEG_INFINITY, f32::max);
         // NaN cannot occur (inputs are checked finite); `best` is -inf only for no particle.
         if best < UNDERFLOW {
             // No particle explains the measurement: start a share of them afresh, forget the
             // old weights, and weigh again.
             report.respread += 1;
             self.respread(None);
-            self.log_likelihood(ev, &mut rel, &mut heights, &mut ll);
+            self.evaluate(ev);
             self.lw.fill(0.0);
         }
         // Each of the iterations weighs with the likelihood to the power 1 / iterations
         // (annealing): a measurement counts once, however many iterations move the particles.
         let temper = 1.0 / self.cfg.iterations as f32;
-        for (w, l) in self.lw.iter_mut().zip(&ll) {
+        for (w, l) in self.lw.iter_mut().zip(&self.scratch.ll) {
             *w += l * temper;
         }
-        self.scratch.ll = ll;
-        self.scratch.rel = rel;
-        self.scratch.heights = heights;
         normalise(&mut self.lw, &mut self.scratch.w)
     }
 
-    /// Systematic resampling; weights become uniform.
+    /// Systematic resampling (the likelihoods in `scratch.ll` follow their particles);
+    /// weights become uniform.
     fn resample(&mut self) {
         let n = self.cfg.particles;
         let u0: f64 = unit::<f64>(&mut self.rng);
@@ -629,11 +700,15 @@ impl Filter {
             }
         }
         std::mem::swap(&mut self.pos, &mut self.scratch.pos);
+        for (o, &j) in self.scratch.proposed.iter_mut().zip(&self.scratch.pick) {
+            *o = self.scratch.ll[j as usize];
+        }
+        std::mem::swap(&mut self.scratch.ll, &mut self.scratch.proposed);
         self.lw.fill(-(n as f32).ln());
     }
 
-    /// Gaussian jitter on every axis, mirrored back into Omega at its bounds (wrapped on a
-    /// periodic axis):
+    /// Gaussian jitter of the particle poses `pos` (axis-major) on every axis, mirrored back
+    /// into Omega at its bounds (wrapped on a periodic axis):
     /// `jitter` grid intervals, or less once the particles' spread is small, so that the
     /// jitter of a measurement's iterations together moves a particle by about
     /// [`JITTER_SPREAD`] of the spread: a fixed jitter would blur a posterior narrower than
@@ -642,7 +717,7 @@ impl Filter {
     /// share of the fit's clearance on the object's translations (of one grid interval on
     /// other axes, the grip's included, and where the map has no clearance), so that a set
     /// that has collapsed off the truth can still move.
-    fn jitter(&mut self) {
+    fn jitter(&mut self, pos: &mut [f32]) {
         let n = self.cfg.particles;
         let s = self.cfg.jitter as f32;
         if s == 0.0 {
@@ -659,7 +734,7 @@ impl Filter {
                 Some(nc) if a.tcp.is_some() => (nc.clearance / a.step) as f32,
                 _ => 1.0,
             };
-            let values = &mut self.pos[k * n..(k + 1) * n];
+            let values = &mut pos[k * n..(k + 1) * n];
             let scale = s.min(per_iteration * spreads[k].max(scale_of_fit));
             noise::jitter(&mut self.rng, values, scale, |u| a.reflect(u));
         }
@@ -706,9 +781,8 @@ impl Mismatch {
 
 /// What one measurement offers the particles, ready for every iteration.
 struct Evidence {
-    /// The negative contact from the slide's start (or the TCP) to the TCP's x, y (m) and
-    /// rz (rad), when the contact did not go in.
-    negative: Option<(NegativeContact, [f64; 3], [f64; 3])>,
+    /// What the contact says of the fit's clearance, where the map allows it.
+    fit: Option<Fit>,
     /// The TCP pose the map coordinates are relative to.
     tcp: [f64; 6],
     /// The measured channels and how the residual weighs them.
@@ -717,6 +791,19 @@ struct Evidence {
     force: bool,
     /// The image's detections, prepared.
     vision: Option<Prepared>,
+}
+
+/// A contact motion against the fit's clearance (module `negative`).
+struct Fit {
+    /// The term on this map.
+    term: NegativeContact,
+    /// The slide's start (or the TCP): x, y (m) and rz (rad) where the tool's axis met the
+    /// goal's height.
+    start: [f64; 3],
+    /// The same at the motion's end.
+    end: [f64; 3],
+    /// The part went in: it lies within the clearance of `end`, not outside the swept line.
+    went_in: bool,
 }
 
 /// Weighted standard deviation on each axis of the particles `pos` (axis-major) under the

@@ -9,6 +9,11 @@
 //! A slide under force that did not go in says the same of every point it passed: the
 //! term then rules out the particles within the clearance of the swept line.
 //!
+//! A contact that went in says the converse: part B is within the clearance of the TCP.
+//! The term then rules out every particle outside that disc, and replaces the depth
+//! channel there too, whose interpolated step would otherwise rule out all but the
+//! inserted cell's centre.
+//!
 //! It applies to maps over `object.x`, `object.y`, with grip translations besides (a grip
 //! offset moves part A in the hand, and the object coordinates are the TCP position that
 //! aligns the parts whatever it is) and object rotations whose play the map shows (cells
@@ -92,7 +97,43 @@ impl NegativeContact {
         to: [f64; 3],
         ll: &mut [f32],
     ) {
-        let n = ll.len();
+        self.visit(pos, rel, from, to, ll.len(), |i, inside| {
+            if inside {
+                ll[i] += RULED_OUT;
+            }
+        });
+    }
+
+    /// Adds [`RULED_OUT`] to the log-likelihood of every particle that a contact motion
+    /// which went in at `at` (the TCP's x, y in m and rz in rad) rules out: those whose
+    /// object offset does not lie within the clearance of `at`, less what their rotation
+    /// errors use of the play.
+    pub fn add_went_in_log_likelihood(
+        &self,
+        pos: &[f32],
+        rel: &[f32],
+        at: [f64; 3],
+        ll: &mut [f32],
+    ) {
+        self.visit(pos, rel, at, at, ll.len(), |i, inside| {
+            if !inside {
+                ll[i] += RULED_OUT;
+            }
+        });
+    }
+
+    /// Calls `f` with each of the `n` particles' index and whether it lies within the
+    /// clearance of the motion from `from` to `to`, as [`Self::add_log_likelihood`] reads
+    /// the motion.
+    fn visit(
+        &self,
+        pos: &[f32],
+        rel: &[f32],
+        from: [f64; 3],
+        to: [f64; 3],
+        n: usize,
+        mut f: impl FnMut(usize, bool),
+    ) {
         let slid = (from[0] - to[0]).hypot(from[1] - to[1]) > UNMOVED * self.clearance;
         let twisted = self
             .rotations
@@ -120,7 +161,7 @@ impl NegativeContact {
         let len2 = ax * ax + ay * ay;
         let [i, j] = self.axes;
         let (us, vs) = (&pos[i * n..(i + 1) * n], &pos[j * n..(j + 1) * n]);
-        for (i, ((l, &u), &v)) in ll.iter_mut().zip(us).zip(vs).enumerate() {
+        for (i, (&u, &v)) in us.iter().zip(vs).enumerate() {
             // The share of the clearance the rotation errors leave (a yaw error counted
             // from the nearest yaw the twist passed).
             let left = 1.0
@@ -138,6 +179,7 @@ impl NegativeContact {
                     })
                     .sum::<f32>();
             if left <= 0.0 {
+                f(i, false);
                 continue;
             }
             let (dx, dy) = ((u - cx) * sx, (v - cy) * sy);
@@ -148,9 +190,7 @@ impl NegativeContact {
                 0.0
             };
             let (ex, ey) = (dx - t * ax, dy - t * ay);
-            if ex * ex + ey * ey < left * left {
-                *l += RULED_OUT;
-            }
+            f(i, ex * ex + ey * ey < left * left);
         }
     }
 }
