@@ -731,7 +731,9 @@ impl Filter {
                 continue;
             }
             let scale_of_fit = match &self.negative {
-                Some(nc) if a.tcp.is_some() => (nc.clearance / a.step) as f32,
+                Some(nc) if a.tcp.is_some() && !a.dof.is_rotation() => {
+                    (nc.clearance / a.step) as f32
+                }
                 _ => 1.0,
             };
             let values = &mut pos[k * n..(k + 1) * n];

@@ -331,3 +331,33 @@ fn a_tilted_tcp_s_axis_meets_the_goal_s_height_beside_it() {
         );
     }
 }
+
+#[test]
+fn a_set_collapsed_on_a_yaw_still_moves_along_it_by_a_share_of_a_grid_step() {
+    // Every particle on one pose: the jitter's floor moves x and y by a share of the fit's
+    // clearance (in their grid steps) and the yaw by the same share of its own grid step,
+    // not of the clearance read in radians (which froze the yaw: here 0.001 of a step).
+    let n = 4000;
+    let mut f = filter(n);
+    for i in 0..n {
+        place(&mut f, i, [2e-4, -1e-4, 0.05]);
+    }
+    let before = f.pos.clone();
+    let mut moved = f.pos.clone();
+    f.jitter(&mut moved);
+    let rms = |k: usize| {
+        let s: f64 = (0..n)
+            .map(|i| f64::from(moved[k * n + i] - before[k * n + i]).powi(2))
+            .sum();
+        (s / n as f64).sqrt()
+    };
+    let share = JITTER_SPREAD / (f.cfg.iterations as f64).sqrt();
+    let x_floor = share * CLEARANCE / 1e-4;
+    for (k, floor) in [(0, x_floor), (1, x_floor), (2, share)] {
+        assert!(
+            (rms(k) / floor - 1.0).abs() < 0.05,
+            "axis {k}: moved {} grid steps, floor {floor}",
+            rms(k)
+        );
+    }
+}
