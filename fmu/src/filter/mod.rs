@@ -37,8 +37,8 @@ use crate::error::{FusionError, Result};
 /// weight would be below the smallest normal f32 (with the Gaussian likelihood a residual of
 /// about 13 sigma; with the Student-t one only an absurd residual).
 const UNDERFLOW: f32 = -87.33655;
-/// The jitter of one measurement's iterations together moves a particle by at most this
-/// share of the particles' spread (standard deviations).
+/// The jitter proposed over one measurement's iterations together moves a particle by at
+/// most this share of the particles' spread (standard deviations).
 const JITTER_SPREAD: f64 = 0.5;
 /// Share of the particles re-spread uniformly when every likelihood underflows, and the
 /// most that a relocation redraws.
@@ -710,7 +710,7 @@ impl Filter {
     /// Gaussian jitter of the particle poses `pos` (axis-major) on every axis, mirrored back
     /// into Omega at its bounds (wrapped on a periodic axis):
     /// `jitter` grid intervals, or less once the particles' spread is small, so that the
-    /// jitter of a measurement's iterations together moves a particle by about
+    /// jitter proposed over a measurement's iterations together moves a particle by about
     /// [`JITTER_SPREAD`] of the spread: a fixed jitter would blur a posterior narrower than
     /// it (the last tens of micrometres of a fit) and with it what the earlier contacts
     /// said. It never falls below that
