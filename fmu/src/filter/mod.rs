@@ -201,7 +201,7 @@ pub struct Filter {
 struct Scratch {
     /// Each particle's log-likelihood of the measurement being taken, at its pose.
     ll: Vec<f32>,
-    /// The moves' proposals' log-likelihoods.
+    /// The moves' proposals' log-likelihoods (and resampling's spare buffer for `ll`).
     proposed: Vec<f32>,
     w: Vec<f32>,
     pos: Vec<f32>,
@@ -551,7 +551,7 @@ impl Filter {
     /// plain jitter would lose that particle at the next weighing and so thin the ridge's
     /// weight against a broad one's. With `beta` 0 every proposal is taken.
     fn mutate(&mut self, ev: &Evidence, beta: f32) {
-        let n = self.cfg.particles;
+        let (n, d) = (self.cfg.particles, self.lookup.ndim());
         let mut proposal = std::mem::take(&mut self.scratch.pos);
         proposal.copy_from_slice(&self.pos);
         self.jitter(&mut proposal);
@@ -565,7 +565,7 @@ impl Filter {
             // A NaN gain (no finite likelihood either way) keeps the pose.
             let take = beta == 0.0 || gain >= 0.0 || unit::<f32>(&mut self.rng).ln() < gain;
             if take {
-                for k in 0..self.lookup.ndim() {
+                for k in 0..d {
                     self.pos[k * n + i] = proposal[k * n + i];
                 }
                 ll[i] = proposed[i];
@@ -602,17 +602,12 @@ impl Filter {
             }
             Self::spread_with(&mut probe_rng, &self.lookup, &mut self.pos, i);
         }
-        let mut ll = std::mem::take(&mut self.scratch.ll);
-        let mut rel = std::mem::take(&mut self.scratch.rel);
-        let mut heights = std::mem::take(&mut self.scratch.heights);
-        self.log_likelihood(ev, &self.pos, &mut rel, &mut heights, &mut ll);
+        self.evaluate(ev);
+        let ll = &self.scratch.ll;
         let is_probe = |i: usize| i >= offset && (i - offset).is_multiple_of(PROBE_EVERY);
         let set = log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i] + ll[i]))
             - log_sum_exp((0..n).filter(|&i| !is_probe(i)).map(|i| self.lw[i]));
         let prior = log_sum_exp(probes.clone().map(|i| ll[i])) - (probes.len() as f64).ln();
-        self.scratch.ll = ll;
-        self.scratch.rel = rel;
-        self.scratch.heights = heights;
         for (j, i) in probes.enumerate() {
             for k in 0..d {
                 self.pos[k * n + i] = self.scratch.kept[j * d + k];
