@@ -50,6 +50,8 @@ pub struct Settings {
     pub mismatch_position: Option<f64>,
     /// `mismatch_interpolation` (share of the lookup's interpolation error).
     pub mismatch_interpolation: Option<f64>,
+    /// `mismatch_reach` (grid steps; 0: every contact's mismatch afresh).
+    pub mismatch_reach: Option<f64>,
     /// `tilt_floor` (rad; negative: off).
     pub tilt_floor: Option<f64>,
     /// `lost` (prior probability per measurement that the particles lost the truth).
@@ -122,6 +124,7 @@ struct Refs {
     mismatch_angle: u32,
     mismatch_position: u32,
     mismatch_interpolation: u32,
+    mismatch_reach: u32,
     tilt_floor: u32,
     lost: u32,
     sigma_force: u32,
@@ -223,6 +226,7 @@ impl Fmu {
             mismatch_angle: vr("mismatch_angle")?,
             mismatch_position: vr("mismatch_position")?,
             mismatch_interpolation: vr("mismatch_interpolation")?,
+            mismatch_reach: vr("mismatch_reach")?,
             tilt_floor: vr("tilt_floor")?,
             lost: vr("lost")?,
             sigma_force: vr("sigma_force")?,
@@ -305,6 +309,7 @@ impl Fmu {
                 settings.mismatch_interpolation,
                 "mismatch_interpolation",
             ),
+            (r.mismatch_reach, settings.mismatch_reach, "mismatch_reach"),
             (r.tilt_floor, settings.tilt_floor, "tilt_floor"),
             (r.lost, settings.lost, "lost"),
             (r.sigma_vision, settings.sigma_vision, "sigma_vision"),

@@ -473,6 +473,20 @@ pub const VARIABLES: &[Variable] = &[
          direction, not its size; depth and insertion are read where the particle lies); \
          0: the diagonal of the map's tilt step; negative: off",
     ),
+    param(
+        "mismatch_reach",
+        121,
+        Real,
+        Start::Real(1.0),
+        "",
+        [Some(0.0), Some(100.0)],
+        "How near a contact must lie to earlier ones, in grid steps of each map axis the TCP \
+         moves, for the map to miss them alike: the mismatch terms (`mismatch`, \
+         `mismatch_angle`, `mismatch_position`, `mismatch_interpolation`) then count once \
+         over the contacts at that place while the sensor noise counts at each, so a press \
+         repeated where the map misses does not say the miss again; 0: every contact's \
+         mismatch is drawn afresh",
+    ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
         "vision",

@@ -295,12 +295,13 @@ pub struct Weights {
     pub along: [f32; 2],
     /// Variance added to the force's and torque's x and y components per unit of their
     /// squared slope (m^2: the square of the position the map may miss, in each axis across
-    /// the approach).
-    pub position: f32,
+    /// the approach), for the force and the torque.
+    pub position: [f32; 2],
     /// Share of the lookup's interpolation-error variance ([`interpolation_errors`]) that
-    /// counts: the `mismatch_interpolation` parameter for the multilinear lookup, 0 for the
-    /// nearest cell (whose error, that share of the cell's width, is in `position`).
-    pub interpolation: f32,
+    /// counts, for the force and the torque: the `mismatch_interpolation` parameter for the
+    /// multilinear lookup, 0 for the nearest cell (whose error, that share of the cell's
+    /// width, is in `position`).
+    pub interpolation: [f32; 2],
     /// Degrees of freedom of a Student-t likelihood over the channels used; 0: Gaussian.
     pub tail: f32,
     /// Relative tilt (rad) below which the force and torque are read where the tilt's
@@ -342,7 +343,8 @@ impl Weights {
             let r: [f32; 3] = std::array::from_fn(|k| self.meas[3 * g + k] - pred[3 * g + k]);
             let a = &self.axis[g];
             let across = self.inv_var[3 * g];
-            let extra = self.position * terms[g] + self.interpolation * terms[INTERPOLATION + g];
+            let extra =
+                self.position[g] * terms[g] + self.interpolation[g] * terms[INTERPOLATION + g];
             if extra > 0.0 && across > 0.0 {
                 // Covariance D + c a a^T, D diagonal: the variance across plus `extra` on x
                 // and y, c the variance along less that across; its inverse by
@@ -1195,8 +1197,8 @@ mod tests {
             let va = 1.0 / f64::from(w.inv_var[3 * g]);
             let vb = 1.0 / (f64::from(w.inv_var[3 * g]) + f64::from(w.along[g]));
             let base = Matrix3::identity() * va + a * a.transpose() * (vb - va);
-            let e = f64::from(w.position) * f64::from(terms[g])
-                + f64::from(w.interpolation) * f64::from(terms[INTERPOLATION + g]);
+            let e = f64::from(w.position[g]) * f64::from(terms[g])
+                + f64::from(w.interpolation[g]) * f64::from(terms[INTERPOLATION + g]);
             let slope = Matrix3::from_diagonal(&Vector3::new(e, e, 0.0));
             let cov = base + slope;
             let r = Vector3::from_iterator(
@@ -1226,8 +1228,8 @@ mod tests {
             inv_var,
             axis: [unit(&meas[..3]), unit(&meas[3..6])],
             along: [1.0 / vb[0] - 1.0 / va[0], 1.0 / vb[1] - 1.0 / va[1]],
-            position: 2.5e-11,
-            interpolation: 0.7,
+            position: [2.5e-11, 4e-11],
+            interpolation: [0.7, 0.5],
             ..Weights::default()
         };
         for terms in [

@@ -109,6 +109,11 @@ pub struct Config {
     /// interpolation error the map's second differences imply; nearest cell: the cell's
     /// width, as a position error in the position term.
     pub mismatch_interpolation: f64,
+    /// How near (in grid steps of each map axis the TCP moves) a contact must lie to an
+    /// earlier one for the map to miss both alike: the mismatch terms then count once over
+    /// the contacts there, not once per contact ([`Filter::looks`]); 0: every contact's
+    /// mismatch is drawn afresh.
+    pub mismatch_reach: f64,
     /// Relative tilt (rad) below which a flat face's force and torque are read along the
     /// tilt's direction, where the map samples the object's tilts about x and y: 0, the
     /// diagonal of the map's tilt step; negative, where each particle lies.
@@ -139,6 +144,7 @@ impl Default for Config {
             mismatch_angle: 0.02,
             mismatch_position: 5e-6,
             mismatch_interpolation: 1.0,
+            mismatch_reach: 1.0,
             tilt_floor: 0.0,
             lost: 1e-9,
         }
@@ -189,6 +195,8 @@ pub struct Filter {
     lw: Vec<f32>,
     rng: Xoshiro256PlusPlus,
     measurements: u32,
+    /// The TCP poses of the contacts weighed so far ([`Filter::looks`]).
+    presses: Vec<[f64; 6]>,
     /// Page's CUSUM of ln(E_prior / E_set) over the measurements since the set last explained
     /// one better than the prior (nats): the evidence that the particles have lost the truth.
     lost_evidence: f64,
@@ -247,6 +255,7 @@ impl Filter {
             lw: vec![-(n as f32).ln(); n],
             rng: Xoshiro256PlusPlus::seed_from_u64(cfg.seed),
             measurements: 0,
+            presses: Vec::new(),
             lost_evidence: 0.0,
             estimate: Estimate::default(),
             scratch: Scratch {
@@ -409,6 +418,9 @@ impl Filter {
             }
         }
         self.measurements += 1;
+        if evidence.force {
+            self.presses.push(m.tcp);
+        }
         self.estimate = Estimate::compute(&self.lookup, &self.cfg, &self.pos, &self.lw);
         Ok(report)
     }
@@ -435,9 +447,10 @@ impl Filter {
         }
         meas[6] = height as f32;
         let [force, torque] = self.lookup.largest();
+        let looks = self.looks(&m.tcp);
         let (f, t) = (
-            Mismatch::of(c, c.sigma_force, &wrench[..3], force),
-            Mismatch::of(c, c.sigma_torque, &wrench[3..], torque),
+            Mismatch::of(c, c.sigma_force, &wrench[..3], force, looks),
+            Mismatch::of(c, c.sigma_torque, &wrench[3..], torque, looks),
         );
         let vd = if use_depth {
             (1.0 / (c.sigma_depth * c.sigma_depth)) as f32
@@ -461,8 +474,8 @@ impl Filter {
             ],
             axis: [f.axis, t.axis],
             along: [f.along, t.along],
-            position: position as f32,
-            interpolation: interpolation as f32,
+            position: [f.repeat, t.repeat].map(|g| g * position as f32),
+            interpolation: [f.repeat, t.repeat].map(|g| g * interpolation as f32),
             tilt_floor: match c.tilt_floor {
                 f if f > 0.0 => f as f32,
                 0.0 => self.lookup.tilt_floor().unwrap_or(0.0) as f32,
@@ -495,6 +508,33 @@ impl Filter {
             force: !m.vision_only,
             vision,
         }
+    }
+
+    /// How many contacts, this one at `tcp` counted, share the map's miss here: 1 plus, per
+    /// earlier contact, exp(-d^2 / 2), d its distance from `tcp` in `mismatch_reach` grid
+    /// steps over the map axes the TCP moves (wrapped on a periodic axis). Two presses
+    /// within a grid step read the same cells, so whatever the map misses there it misses
+    /// for both ([`repeated`]).
+    fn looks(&self, tcp: &[f64; 6]) -> f64 {
+        let reach = self.cfg.mismatch_reach;
+        if reach <= 0.0 {
+            return 1.0;
+        }
+        let near = |p: &[f64; 6]| {
+            let d2: f64 = (self.lookup.axes().iter())
+                .filter_map(|a| {
+                    let c = a.tcp?;
+                    let d = (tcp[c] - p[c]) / a.step;
+                    let d = a.period.map_or(d, |t| {
+                        let t = f64::from(t);
+                        d - t * (d / t).round()
+                    });
+                    Some((d / reach).powi(2))
+                })
+                .sum();
+            (-0.5 * d2).exp()
+        };
+        1.0 + self.presses.iter().map(near).sum::<f64>()
     }
 
     /// The log-likelihood of `ev` (Eq. 3: map residuals, image residuals) of each particle
@@ -748,16 +788,22 @@ struct Mismatch {
     /// 1 / (sigma^2 + (mismatch |v|)^2) - `across`: what the component along `axis` weighs
     /// more (or less) than one across it.
     along: f32,
+    /// The factor on the mismatch's variances at this contact ([`repeated`]): 1 at a place
+    /// pressed for the first time.
+    repeat: f32,
 }
 
 impl Mismatch {
     /// The mismatch of a measured vector `v` whose sensor noise is `sigma`, the vector's
-    /// magnitude counted up to the map's `largest`: a wrench beyond anything the map holds
-    /// is not excused by its own size.
-    fn of(c: &Config, sigma: f64, v: &[f64], largest: f64) -> Self {
+    /// magnitude counted up to the map's `largest` (a wrench beyond anything the map holds
+    /// is not excused by its own size), at the `looks`-th contact at its place
+    /// ([`Filter::looks`]).
+    fn of(c: &Config, sigma: f64, v: &[f64], largest: f64, looks: f64) -> Self {
         let magnitude = v.iter().map(|x| x * x).sum::<f64>().sqrt();
         let counted = magnitude.min(largest);
-        let inverse = |share: f64| 1.0 / (sigma * sigma + (share * counted).powi(2));
+        let missed = |share: f64| (share * counted).powi(2);
+        let repeat = repeated(looks, missed(c.mismatch_angle) / (sigma * sigma));
+        let inverse = |share: f64| 1.0 / (sigma * sigma + repeat * missed(share));
         let across = inverse(c.mismatch_angle);
         if magnitude <= sigma {
             // No direction to speak of: the smaller of the two weights on every component.
@@ -766,14 +812,28 @@ impl Mismatch {
                 across: w,
                 axis: [0.0; 3],
                 along: 0.0,
+                repeat: repeat as f32,
             };
         }
         Self {
             across: across as f32,
             axis: std::array::from_fn(|k| (v[k] / magnitude) as f32),
             along: (inverse(c.mismatch) - across) as f32,
+            repeat: repeat as f32,
         }
     }
+}
+
+/// The factor on a mismatch variance m at the `k`-th contact at one place (k >= 1, a soft
+/// count; `ratio` = m / e, e the sensor noise's variance). The map misses alike at every
+/// contact there while the noise is drawn afresh, so k contacts with one residual r weigh
+/// r^2 / (m + e / k) together. With variances e + g_j m, g_j = (2 j - 1) + j (j - 1) m / e,
+/// contact j weighs 1 / (e + g_j m) = (e / m) (1 / (e + (j - 1) m) - 1 / (e + j m)), and
+/// these add up to exactly that. 1 at the first contact; about 2 k - 1 where the noise
+/// outweighs the miss; about k^2 m / e where the miss outweighs the noise.
+fn repeated(k: f64, ratio: f64) -> f64 {
+    let k = k.max(1.0);
+    (2.0 * k - 1.0) + k * (k - 1.0) * ratio
 }
 
 /// What one measurement offers the particles, ready for every iteration.

@@ -1,6 +1,6 @@
 //! The filter's state as bytes, for the FMU's saved and serialized states: particles,
-//! weights, the random generator and the measurement count, so that a restored filter
-//! replays bit for bit. The estimate is recomputed on restore.
+//! weights, the random generator, the measurement count and the contacts' TCP poses, so
+//! that a restored filter replays bit for bit. The estimate is recomputed on restore.
 
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -116,6 +116,10 @@ impl Filter {
         w.f32s(&self.lw);
         w.u32(self.measurements);
         w.f64(self.lost_evidence);
+        w.u32(self.presses.len() as u32);
+        for p in &self.presses {
+            p.iter().for_each(|v| w.f64(*v));
+        }
         // Serializing four u64 into JSON cannot fail.
         w.bytes(
             serde_json::to_string(&self.rng)
@@ -156,6 +160,26 @@ impl Filter {
                 "the evidence that the particles are lost is {lost_evidence} nats, not finite and >= 0"
             )));
         }
+        let count = r.u32()?;
+        if count > measurements {
+            return Err(FusionError::State(format!(
+                "{count} contact poses for {measurements} measurements"
+            )));
+        }
+        // Grown as read: a corrupt count fails at the bytes' end, not at allocation.
+        let mut presses = Vec::new();
+        for _ in 0..count {
+            let mut p = [0.0; 6];
+            for v in &mut p {
+                *v = r.f64()?;
+            }
+            if let Some(v) = p.iter().find(|v| !v.is_finite()) {
+                return Err(FusionError::State(format!(
+                    "a contact's TCP pose holds {v}"
+                )));
+            }
+            presses.push(p);
+        }
         let rng: Xoshiro256PlusPlus = serde_json::from_slice(r.bytes()?)
             .map_err(|e| FusionError::State(format!("random generator state: {e}")))?;
         // Particles live in Omega: coordinates within its bounds (grid units) per axis.
@@ -181,6 +205,7 @@ impl Filter {
         self.lw = lw;
         self.measurements = measurements;
         self.lost_evidence = lost_evidence;
+        self.presses = presses;
         self.rng = rng;
         self.estimate = Estimate::compute(&self.lookup, &self.cfg, &self.pos, &self.lw);
         Ok(())

@@ -132,6 +132,7 @@ fn equal_seeds_give_equal_particles_and_other_seeds_do_not() {
 
 #[test]
 fn a_restored_state_replays_bit_for_bit() {
+    // Every contact at one place: the restored contact poses decide how the next weighs.
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
     let ms: Vec<Measurement> = (0..3)
         .map(|_| measurement(-2e-3, 1e-3, [0.0, 0.0], 2e-3, &mut rng))
@@ -281,20 +282,25 @@ fn one_gross_outlier_keeps_the_truth_within_two_sigma_and_the_next_contact_recov
     );
 }
 
-/// A filter locked on `wrong` by three contacts there, then fed contacts of `truth`, each
-/// at its last estimate, with `lost` as given: the contacts of `truth` it needed until its
-/// estimate was within two grid steps (None: not within 6), and the particles it redrew.
+/// Contacts [`unlock`] waits for.
+const UNLOCK_CONTACTS: usize = 12;
+
+/// A filter locked on `wrong` by three contacts there (pressed two grid steps apart, so
+/// that each says the map's miss afresh), then fed contacts of `truth`, each at its last
+/// estimate, with `lost` as given: the contacts of `truth` it needed until its
+/// estimate was within two grid steps (None: not within [`UNLOCK_CONTACTS`]), and the
+/// particles it redrew.
 fn unlock(seed: u64, lost: f64, wrong: [f64; 2], truth: [f64; 2]) -> (Option<usize>, u32) {
     let mut f = filter(seed);
     f.cfg.lost = lost;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed + 200);
-    for _ in 0..3 {
-        f.measure(&measurement(wrong[0], wrong[1], [0.0, 0.0], 1e-3, &mut rng))
+    for at in [[0.0, 0.0], [2.0 * STEP, 0.0], [0.0, 2.0 * STEP]] {
+        f.measure(&measurement(wrong[0], wrong[1], at, 1e-3, &mut rng))
             .expect("finite");
     }
     assert!(error(&f, wrong) < 2.0 * STEP, "{:?}", f.estimate());
     let mut redrawn = 0;
-    for k in 1..=6 {
+    for k in 1..=UNLOCK_CONTACTS {
         let at = [f.estimate().pose[0], f.estimate().pose[1]];
         redrawn += f
             .measure(&measurement(truth[0], truth[1], at, 1e-3, &mut rng))
@@ -312,22 +318,21 @@ fn a_set_locked_on_a_wrong_hypothesis_relocates_and_a_sound_one_does_not() {
     // The part moved after three contacts (or the three were misread): the set holds a
     // hypothesis 5 mm off with a spread of a grid step. Relocation redraws particles from
     // the prior at the first contact that the set explains far worse than the prior does.
-    // 24 streams (each case on eight). Measured: without relocation never within 6
-    // contacts; with it within 2-4 on 20 and 5-6 on 4 (all of the third case). Before the
-    // interpolation term, 2-4 on all 24: a set at the hole, where the lookup's own error is
-    // large, now reads wider, and a contact it does not explain weighs less against it
-    // (with the Student-t tails about 5 nats less per contact), so relocation comes a
-    // contact or two later. Over 48 streams of the third case: with the term 31 unlock in 4
-    // contacts, 9 in 5, 4 in 6, 4 later; without it 33 in 3, 12 in 4, 1 each in 5, 6 and
-    // later.
+    // 24 streams (each case on eight), each contact at the last estimate. In the first two
+    // cases the set meets a rim torque it cannot explain; in the third part A rests on the
+    // flat top where the set expects the rim, a small torque that the map's own error at
+    // the hole explains, alike at every press made there (`mismatch_reach`), so that the
+    // evidence gathers slowly. Measured: without relocation never within 12 contacts; with
+    // it the first two cases within 2-4, the third within 7-11 (48 streams; 3-7 with every
+    // contact's miss drawn afresh, `mismatch_reach` 0).
     let cases = [
         ([-3.0e-3, 2.0e-3], [2.5e-3, -1.5e-3]),
         ([3.5e-3, 3.0e-3], [-1.0e-3, -2.5e-3]),
         ([0.5e-3, -4.0e-3], [-2.0e-3, 3.5e-3]),
     ];
-    let (mut quick, mut unlocked) = (0, 0);
     for seed in 1..=24u64 {
-        let (wrong, truth) = cases[(seed as usize - 1) % cases.len()];
+        let case = (seed as usize - 1) % cases.len();
+        let (wrong, truth) = cases[case];
         let (with, redrawn) = unlock(seed, Config::default().lost, wrong, truth);
         let (without, none) = unlock(seed, 0.0, wrong, truth);
         assert!(redrawn > 0 && none == 0, "seed {seed}: {redrawn} {none}");
@@ -335,11 +340,12 @@ fn a_set_locked_on_a_wrong_hypothesis_relocates_and_a_sound_one_does_not() {
             without.is_none(),
             "seed {seed}: {without:?} contacts without relocation"
         );
-        quick += usize::from(with.is_some_and(|k| k <= 4));
-        unlocked += usize::from(with.is_some());
+        let within = if case < 2 { 4 } else { UNLOCK_CONTACTS };
+        assert!(
+            with.is_some_and(|k| k <= within),
+            "seed {seed}: {with:?} contacts with relocation"
+        );
     }
-    assert!(quick >= 18, "{quick} of 24 streams within 4 contacts");
-    assert!(unlocked >= 22, "{unlocked} of 24 streams within 6 contacts");
     // Contacts the set explains redraw next to nothing: at most a share `lost` of the
     // particles per contact (4 of 4000), where the set is as broad as the prior's reading.
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
@@ -1314,6 +1320,9 @@ fn particles_zero_picks_four_times_as_many_per_dof_beyond_two() {
 fn distance_from_the_exact_posterior(f: &mut Filter, truth: [f64; 2], bins: usize) -> f64 {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
     let m = measurement(truth[0], truth[1], [0.0, 0.0], 2e-3, &mut rng);
+    // The likelihood the measurement is weighed with (before it, so that it is not counted
+    // as a second contact at its own place).
+    let ev = f.evidence(&m, None);
     f.measure(&m).expect("finite");
     let axes: Vec<MapAxis> = f.lookup.axes().to_vec();
     let bin = |k: usize, u: f32| {
@@ -1333,7 +1342,6 @@ fn distance_from_the_exact_posterior(f: &mut Filter, truth: [f64; 2], bins: usiz
         }
     }
     let (mut rel, mut heights, mut ll) = (vec![0.0; 2 * cells], Vec::new(), vec![0.0; cells]);
-    let ev = f.evidence(&m, None);
     f.log_likelihood(&ev, &grid, &mut rel, &mut heights, &mut ll);
     let top = ll.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     let mut exact = vec![0.0f64; bins * bins];
@@ -1376,4 +1384,80 @@ fn the_first_contact_leaves_the_particles_distributed_as_the_exact_posterior() {
         let tv = distance_from_the_exact_posterior(&mut f, [2.3e-3, -1.1e-3], 10);
         assert!(tv < 0.025, "seed {seed}: total variation {tv}");
     }
+}
+
+#[test]
+fn contacts_repeated_at_a_place_weigh_together_as_one_miss_shared_and_fresh_noise() {
+    // The factor's defining property, checked against the covariance written out: k
+    // contacts with one residual r, their miss m shared and their noise e each their own,
+    // have the joint Gaussian r^2 1^T (m 1 1^T + e I)^-1 1 = k r^2 / (e + k m); the
+    // contacts one by one, each with variance e + repeated(j) m, must add up to it.
+    for (e, m) in [
+        (1.0, 0.0),
+        (1.0, 0.01),
+        (1.0, 1.0),
+        (0.2, 3.0),
+        (1e-6, 1e-5),
+    ] {
+        let mut sum = 0.0;
+        for k in 1..=12 {
+            sum += 1.0 / (e + repeated(k as f64, m / e) * m);
+            // The joint precision of k looks: 1^T (m 1 1^T + e I)^-1 1 by Sherman-Morrison.
+            let joint = k as f64 / e - m * (k as f64 / e).powi(2) / (1.0 + m * k as f64 / e);
+            assert!(
+                (sum - joint).abs() <= 1e-9 * joint,
+                "e {e}, m {m}, k {k}: {sum} against {joint}"
+            );
+        }
+    }
+    assert_eq!(repeated(1.0, 5.0), 1.0);
+}
+
+/// A world whose torques the map misses by the same turn at every contact, each contact at
+/// the same place `looks` times: in how many of [`CASES`] cases does the truth stay within
+/// 2 sigma on both axes after the last, with `mismatch_reach` as given?
+fn kept_under_a_repeated_miss(reach: f64, looks: usize) -> usize {
+    let turned = |t: &mut [f64]| {
+        let (s, c) = 0.15f64.sin_cos();
+        let [x, y] = [t[0], t[1]];
+        t[0] = c * x - s * y;
+        t[1] = s * x + c * y;
+    };
+    (0..CASES)
+        .filter(|&k| {
+            let a = 0.3 + 0.52 * k as f64;
+            let r = (0.6 + 0.1 * (k % 12) as f64) * 1e-3;
+            let truth = [r * a.cos(), r * a.sin()];
+            let mut f = filter(k + 80);
+            f.cfg.mismatch_angle = 0.15;
+            f.cfg.mismatch_reach = reach;
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(k + 180);
+            for _ in 0..looks {
+                let mut m = measurement(truth[0], truth[1], [0.0, 0.0], 2e-3, &mut rng);
+                turned(&mut m.wrench[3..]);
+                f.measure(&m).expect("finite");
+            }
+            let e = f.estimate();
+            (0..2).all(|i| (e.pose[i] - truth[i]).abs() <= 2.0 * e.std[i])
+        })
+        .count()
+}
+
+#[test]
+fn a_contact_repeated_where_the_map_misses_does_not_say_the_miss_again() {
+    // Torques turned by 0.15 rad at every contact (one miss of the map at that place, as
+    // a rim's lever that contact physics moves), `mismatch_angle` set to it, and the same
+    // press made six times. Counted once over the six, the miss keeps the truth within 2
+    // sigma as one press does; counted at each press it does not. Measured: counted once
+    // 36 of 36, at each press 5, one press alone 34.
+    let once = kept_under_a_repeated_miss(1.0, 6);
+    let each = kept_under_a_repeated_miss(0.0, 6);
+    assert!(
+        once >= 30,
+        "the truth kept in {once} of {CASES} with the miss counted once"
+    );
+    assert!(
+        each + 15 <= once,
+        "counted at each press {each}, once {once}"
+    );
 }

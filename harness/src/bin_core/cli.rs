@@ -288,6 +288,10 @@ pub struct RunArgs {
     /// error that counts as mismatch; 0: none).
     #[arg(long)]
     pub mismatch_interpolation: Option<f64>,
+    /// FMU parameter `mismatch_reach` (grid steps: how near an earlier contact a contact
+    /// shares the map's miss with it; 0: every contact's mismatch afresh).
+    #[arg(long)]
+    pub mismatch_reach: Option<f64>,
     /// FMU parameter `tilt_floor` (rad: the relative tilt below which a flat face's wrench
     /// is read along the tilt's direction; 0: the map's tilt step's diagonal; negative: off).
     #[arg(long, allow_negative_numbers = true)]
@@ -422,6 +426,7 @@ impl RunArgs {
             mismatch_angle: self.mismatch_angle,
             mismatch_position: self.mismatch_position,
             mismatch_interpolation: self.mismatch_interpolation,
+            mismatch_reach: self.mismatch_reach,
             tilt_floor: self.tilt_floor,
             measure_mismatch: self.measure_mismatch,
             lost: self.lost,
