@@ -524,11 +524,7 @@ impl Filter {
             let d2: f64 = (self.lookup.axes().iter())
                 .filter_map(|a| {
                     let c = a.tcp?;
-                    let d = (tcp[c] - p[c]) / a.step;
-                    let d = a.period.map_or(d, |t| {
-                        let t = f64::from(t);
-                        d - t * (d / t).round()
-                    });
+                    let d = f64::from(a.difference(((tcp[c] - p[c]) / a.step) as f32));
                     Some((d / reach).powi(2))
                 })
                 .sum();
