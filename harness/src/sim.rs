@@ -453,7 +453,12 @@ impl Sim {
         if swept.inserted {
             return swept;
         }
-        let pressed = self.motion([swept.tcp[0], swept.tcp[1]], None);
+        // Where the tool's axis meets the goal's height, where a motion is commanded: a
+        // tilted carriage stands `lean` times its height beside it.
+        let [ax, ay, az] = self.wrist_angles;
+        let lean = lean(&Rotation3::from_euler_angles(ax, ay, az));
+        let foot = [0, 1].map(|k| swept.tcp[k] - lean[k] * swept.tcp[2]);
+        let pressed = self.motion(foot, None);
         Contact {
             time: swept.time + pressed.time,
             ..pressed
