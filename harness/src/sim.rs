@@ -29,7 +29,7 @@ use crate::error::{HarnessError, Result};
 use crate::scene::{
     APPROACH_CLEARANCE, SceneSpec, WRIST_JOINTS, scene_path, write_scene, write_scene_of,
 };
-use crate::world::{Contact, World, lean};
+use crate::world::{Contact, World, foot, lean};
 
 /// Longest contact motion (s of simulated time) before it is reported as not settled.
 pub const MAX_TIME: f64 = 2.0;
@@ -453,12 +453,10 @@ impl Sim {
         if swept.inserted {
             return swept;
         }
-        // Where the tool's axis meets the goal's height, where a motion is commanded: a
-        // tilted carriage stands `lean` times its height beside it.
+        // Where a motion is commanded: a tilted carriage stands beside it.
         let [ax, ay, az] = self.wrist_angles;
-        let lean = lean(&Rotation3::from_euler_angles(ax, ay, az));
-        let foot = [0, 1].map(|k| swept.tcp[k] - lean[k] * swept.tcp[2]);
-        let pressed = self.motion(foot, None);
+        let at = foot(swept.tcp, &Rotation3::from_euler_angles(ax, ay, az));
+        let pressed = self.motion(at, None);
         Contact {
             time: swept.time + pressed.time,
             ..pressed

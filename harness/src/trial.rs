@@ -18,7 +18,7 @@ use crate::error::Result;
 use crate::eye::Eye;
 use crate::fmu_driver::{Estimate, Fmu, Settings};
 use crate::sensor::{Noise, map_wrench};
-use crate::world::{World, lean};
+use crate::world::{World, foot, lean};
 
 /// How the next approach point is chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -241,11 +241,10 @@ impl Step {
     /// Where the tool's axis met the goal's height at this contact (x, y, m): the TCP's
     /// own x, y for a level tool; what part B's offset is compared with.
     pub fn foot(&self) -> [f64; 2] {
-        let l = lean(&nalgebra::Rotation3::new(nalgebra::Vector3::from(self.rot)));
-        [
-            self.tcp[0] - l[0] * self.tcp[2],
-            self.tcp[1] - l[1] * self.tcp[2],
-        ]
+        foot(
+            self.tcp,
+            &nalgebra::Rotation3::new(nalgebra::Vector3::from(self.rot)),
+        )
     }
 }
 

@@ -30,6 +30,13 @@ pub fn lean(rot: &nalgebra::Rotation3<f64>) -> [f64; 2] {
     [tool.x / tool.z, tool.y / tool.z]
 }
 
+/// Where the tool's axis of a TCP at `tcp` (x, y and its height, m) turned by `rot` meets
+/// the goal's height (x, y, m): where the contact motion that left it there was commanded.
+pub fn foot(tcp: [f64; 3], rot: &nalgebra::Rotation3<f64>) -> [f64; 2] {
+    let l = lean(rot);
+    [tcp[0] - l[0] * tcp[2], tcp[1] - l[1] * tcp[2]]
+}
+
 /// What one contact motion ends with.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Contact {

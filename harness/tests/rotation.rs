@@ -281,8 +281,7 @@ fn on_a_tilted_top_a_press_reads_the_imposed_force_and_a_slide_goes_its_whole_wa
         let (from, to) = ([-0.003, -0.006], [0.003, -0.006]);
         let slid = sim.slide_motion(from, to);
         assert!(!slid.inserted, "{slid:?}");
-        let lean = harness::world::lean(&nalgebra::Rotation3::new(slid.rot.into()));
-        let foot = [0, 1].map(|k| slid.tcp[k] - lean[k] * slid.tcp[2]);
+        let foot = harness::world::foot(slid.tcp, &nalgebra::Rotation3::new(slid.rot.into()));
         assert!(
             (foot[0] - to[0]).hypot(foot[1] - to[1]) < 2e-5,
             "the slide from {from:?}, tcp {tcp:?}, pressed again off its end {to:?}: foot \
