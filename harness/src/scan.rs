@@ -140,5 +140,6 @@ fn meta(task: &Task) -> Result<MapMeta> {
         ),
         clearance: Some(task.fit()?.clearance()),
         symmetry: task.omega.symmetry,
+        play: None,
     })
 }

@@ -18,7 +18,7 @@ use crate::map::{FtMap, MapMeta, NCH, SourceMesh};
 use crate::mesh::Mesh;
 use crate::task::Task;
 use crate::task::dof::{Axis, Pose};
-use crate::task::fit::{Fit, MeshFit};
+use crate::task::fit::{Fit, MeshFit, rotational_play};
 use crate::task::omega::{Grid, MAX_AXES};
 use crate::wrench::WrenchModel;
 use crate::wrench::WrenchSetup;
@@ -117,8 +117,8 @@ pub fn generate(
 /// Revision of what a computed map holds, part of the cache key: raise it when a change
 /// to the generator changes the maps (2: the clearance in the metadata; 3: the symmetry;
 /// 4: thin contact regions at a finer pixel; 5: thin by mean width too; 6: the object's
-/// translations out to `omega.reach`).
-const MAP_REVISION: u32 = 6;
+/// translations out to `omega.reach`; 7: the fit's rotational play in the metadata).
+const MAP_REVISION: u32 = 7;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and
@@ -186,6 +186,7 @@ pub fn generate_with(
         ));
     }
     let grid = task.grid()?;
+    let pair = Pair::new(mesh_a, mesh_b).ok();
     let meta = MapMeta {
         task: task.name.clone(),
         model: opts.model,
@@ -209,15 +210,16 @@ pub fn generate_with(
         })
         .collect(),
         generator: format!("ftmap {} ({})", env!("CARGO_PKG_VERSION"), backend.name()),
-        clearance: match &task.geometry {
-            Some(g) => Some(g.clearance()),
+        clearance: match (&task.geometry, &pair) {
+            (Some(g), _) => Some(g.clearance()),
             // A fit that cannot be measured (parts not in a fit) is no reason to refuse a map.
-            None => Pair::new(mesh_a, mesh_b)
-                .and_then(|pair| MeshFit::measure(task, &pair))
-                .ok()
-                .map(|f| f.clearance()),
+            (None, Some(pair)) => MeshFit::measure(task, pair).ok().map(|f| f.clearance()),
+            (None, None) => None,
         },
         symmetry: task.omega.symmetry,
+        play: pair
+            .as_ref()
+            .and_then(|pair| measured_play(task, &grid, pair)),
     };
     let mut map = FtMap::zeros(grid.clone(), meta);
     if let Some([i, n]) = opts.shard {
@@ -545,6 +547,21 @@ impl<'a> Fine<'a> {
             },
         )
     }
+}
+
+/// The fit's rotational play ([`rotational_play`]) about each of x, y, z that `grid`
+/// samples as an object rotation (0 on the others, and where the part turns freely);
+/// `None` where it samples none or none is measured.
+fn measured_play(task: &Task, grid: &Grid, pair: &Pair) -> Option<[f64; 3]> {
+    let mut play = [0.0; 3];
+    for a in grid.axes() {
+        if a.count > 1 && a.dof.pose == Pose::Object && a.dof.axis.is_rotation() {
+            let k = a.dof.axis.index() - 3;
+            play[k] = rotational_play(pair, task.contact.approach.into(), Vector3::ith(k, 1.0))
+                .unwrap_or(0.0);
+        }
+    }
+    play.iter().any(|&p| p > 0.0).then_some(play)
 }
 
 /// Number of configurations a computation (or shard `[i, n]` of it) computes.

@@ -1,13 +1,14 @@
 //! The fit measured on the meshes alone with parry (a task without `[geometry]`) against
-//! the one its dimensions give: the insertion limit in every direction, the clearance and
-//! the chamfers' depth.
+//! the one its dimensions give: the insertion limit in every direction, the clearance, the
+//! chamfers' depth and the rotational play.
 
 use std::f64::consts::TAU;
 
 use ftmap::Task;
 use ftmap::exact::Pair;
 use ftmap::task::cad::{self, Geometry, Role};
-use ftmap::task::fit::{Fit, MeshFit};
+use ftmap::task::fit::{Fit, MeshFit, rotational_play};
+use nalgebra::Vector3;
 
 /// The peg_in_hole task with 0.3 mm chamfers on the peg's tip and 0.5 mm on the hole's
 /// mouth, its meshes written to a temporary folder.
@@ -71,4 +72,63 @@ fn the_meshes_alone_give_the_fit_of_the_dimensions() {
         assert!((ch - want).abs() < 2e-6, "{name}: chamfers {ch} vs {want}");
     }
     assert!(Fit::chamfers(chamfered().geometry().expect("geometry")) > 0.0);
+}
+
+/// The largest `x` in [0, `hi`] where `inside` holds, by bisection (it holds at 0).
+fn largest(inside: impl Fn(f64) -> bool, hi: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0, hi);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if inside(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+#[test]
+fn the_rotational_play_measured_on_the_meshes_is_the_geometry_s() {
+    let pair_of = |task: &Task| {
+        Pair::new(
+            &task.part_a.load().expect("A"),
+            &task.part_b.load().expect("B"),
+        )
+        .expect("pair")
+    };
+    // A round peg tilted about its tip's centre in a blind bore touches the mouth's rim:
+    // r cos(t) + tan(t) depth = R (its tip's edge held clear of the floor).
+    let task = Task::find("peg_in_hole").expect("task");
+    let Ok(&Geometry::RoundPeg {
+        peg_radius: r,
+        hole_radius: big_r,
+        hole_depth: depth,
+        ..
+    }) = task.geometry()
+    else {
+        panic!("peg_in_hole is a round peg");
+    };
+    let pair = pair_of(&task);
+    let want = largest(|t| r * t.cos() + t.tan() * depth <= big_r, 0.1);
+    let approach = task.contact.approach.into();
+    for axis in [Vector3::x(), Vector3::y(), Vector3::new(1.0, 1.0, 0.0)] {
+        let play = rotational_play(&pair, approach, axis).expect("a tilt play");
+        assert!(
+            (play - want).abs() < 0.01 * want,
+            "tilt about {axis:?}: {play} rad against {want}"
+        );
+    }
+    // About its own axis a round peg turns freely: no play to state.
+    assert_eq!(rotational_play(&pair, approach, Vector3::z()), None);
+    // The octagon turned about the approach: until a corner meets a flat.
+    let task = Task::find("octagon").expect("task");
+    let geometry = task.geometry().expect("geometry");
+    let want = largest(|yaw| geometry.inserts_turned([0.0, 0.0], yaw), 0.1);
+    let play = rotational_play(&pair_of(&task), task.contact.approach.into(), Vector3::z())
+        .expect("a yaw play");
+    assert!(
+        (play - want).abs() < 0.01 * want,
+        "octagon's yaw: {play} rad against {want}"
+    );
 }

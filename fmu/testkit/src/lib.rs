@@ -44,6 +44,7 @@ pub fn synthetic_meta(task: &str) -> MapMeta {
         generator: "ftfusion::synthetic".into(),
         clearance: Some(CLEARANCE),
         symmetry: None,
+        play: None,
     }
 }
 

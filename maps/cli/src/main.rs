@@ -558,6 +558,16 @@ fn cmd_info(file: &Path) -> Result<()> {
     for coarse in too_coarse(g, m.pixel, m.clearance) {
         println!("warning    {coarse}");
     }
+    if let Some(play) = m.play {
+        let about = ["rx", "ry", "rz"]
+            .iter()
+            .zip(play)
+            .filter(|(_, p)| *p > 0.0)
+            .map(|(a, p)| format!("{a} ±{:.4}°", p.to_degrees()))
+            .collect::<Vec<_>>()
+            .join(", ");
+        println!("play       {about} (at zero offset, from the geometry)");
+    }
     for s in &m.sources {
         println!("mesh {}     {} sha256 {}", s.role, s.file, s.sha256);
     }

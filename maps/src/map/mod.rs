@@ -69,6 +69,11 @@ pub struct MapMeta {
     /// 2 pi / n; absent when the parts have none that Omega uses.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub symmetry: Option<u32>,
+    /// The fit's rotational play about x, y and z at zero offset by the geometry (rad,
+    /// [`crate::task::fit::rotational_play`]) on the object rotations the grid samples, 0 on
+    /// the others and where the part turns freely; absent when none was measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub play: Option<[f64; 3]>,
 }
 
 /// A Force Torque Map: `NCH` values per cell of a grid, cell-major.
@@ -159,18 +164,26 @@ impl FtMap {
         self.depth_range().map(|[lo, hi]| 0.5 * (lo + hi))
     }
 
-    /// The fit's rotational play along axis `k`, a whole number of grid steps below the
-    /// true one: one step short of how far from zero the cells through the map's centre
-    /// (every other axis at its sample nearest zero) stay inserted both ways, since the
-    /// depth maps' pixel may round the fit open by up to a step (octagon_yaw: inserted to
-    /// ±1° on its 0.05 mm pixel, ±0.70° by the geometry; play 0.5°). 0 where `k` is no
-    /// object rotation, the map has no depths or its centre is not inserted.
+    /// The fit's rotational play along axis `k`: the geometry's, where the header holds it
+    /// ([`MapMeta::play`]); else a whole number of grid steps below the true one: one step
+    /// short of how far from zero the cells through the map's centre (every other axis at
+    /// its sample nearest zero) stay inserted both ways, since the depth maps' pixel may
+    /// round the fit open by up to a step (octagon_yaw: inserted to ±1° on its 0.05 mm
+    /// pixel, ±0.70° by the geometry; play 0.5°), which on a grid whose step is about the
+    /// play (the tilted hole's 0.25° against 0.29°) leaves none. 0 where `k` is no object
+    /// rotation, the map has no depths or its centre is not inserted.
     pub fn rotational_play(&self, k: usize) -> f64 {
         let Some(a) = self.grid.axes().get(k) else {
             return 0.0;
         };
         if !(a.dof.pose == crate::Pose::Object && a.dof.is_rotation()) {
             return 0.0;
+        }
+        if let Some(play) = self.meta.play
+            && let Some(&p) = play.get(a.dof.axis.index() - 3)
+            && p > 0.0
+        {
+            return p;
         }
         let Some(middle) = self.contact_depth() else {
             return 0.0;
@@ -286,6 +299,7 @@ pub(crate) mod tests {
             generator: "test".into(),
             clearance: None,
             symmetry: None,
+            play: None,
         };
         let mut map = FtMap::zeros(grid, meta);
         for cell in 0..map.grid().cells() {

@@ -7,7 +7,8 @@
 use std::f64::consts::TAU;
 use std::fmt::Debug;
 
-use nalgebra::{Isometry3, Translation3, Vector3};
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use parry3d_f64::query;
 use rayon::prelude::*;
 
 use crate::depth::View;
@@ -153,6 +154,60 @@ impl MeshFit {
         }
         Ok(Self { limits, chamfers })
     }
+}
+
+/// The largest turn (rad) within which a fit's rotational play is looked for: a part that
+/// turns this far without touching (a round peg about its axis) has no play to state.
+const MAX_PLAY: f64 = 0.2;
+/// Halvings of the play's bracket: [`MAX_PLAY`] / 2^40, far below a nanoradian.
+const PLAY_HALVINGS: usize = 40;
+
+/// The fit's rotational play about `axis` (goal frame) at zero offset, by parry's exact
+/// distances between the meshes of `pair`: how far part A, seated at the goal and turned
+/// about its frame's origin (the tip's centre), turns either way before it touches part B
+/// (the smaller way), its lowest point held [`LIFT`] above where it sat, so that a tilted
+/// tip's edge does not dig into a blind hole's floor. A position-controlled part goes in
+/// where its offset over the clearance and its rotation over this play sum to less than
+/// one (to first order; a round peg tilted in its bore: the clearance over the depth).
+/// `None` where part A touches unturned or turns [`MAX_PLAY`] both ways freely.
+pub fn rotational_play(pair: &Pair, approach: Vector3<f64>, axis: Vector3<f64>) -> Option<f64> {
+    let w = View::along(approach).w;
+    let axis = Unit::new_normalize(axis);
+    let lowest = |r: &UnitQuaternion<f64>| {
+        pair.a
+            .vertices()
+            .iter()
+            .map(|p| (r * p).coords.dot(&w))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let seat = lowest(&UnitQuaternion::identity());
+    let free = |angle: f64| {
+        let r = UnitQuaternion::from_axis_angle(&axis, angle);
+        let pose = Isometry3::from_parts(Translation3::from(w * (seat - lowest(&r) + LIFT)), r);
+        query::distance(&pose, &pair.a, &Isometry3::identity(), &pair.b).is_ok_and(|d| d > 0.0)
+    };
+    if !free(0.0) {
+        return None;
+    }
+    let one_way = |sign: f64| {
+        if free(sign * MAX_PLAY) {
+            return None;
+        }
+        let (mut lo, mut hi) = (0.0, MAX_PLAY);
+        for _ in 0..PLAY_HALVINGS {
+            let mid = 0.5 * (lo + hi);
+            if free(sign * mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(lo)
+    };
+    one_way(1.0)
+        .into_iter()
+        .chain(one_way(-1.0))
+        .reduce(f64::min)
 }
 
 /// `values` at [`DIRECTIONS`] even directions interpolated linearly at `theta`.
