@@ -99,6 +99,13 @@ impl Header {
         if let Some(c) = m.clearance {
             positive("meta.clearance", c, true)?;
         }
+        for (k, &p) in m.play.iter().flatten().enumerate() {
+            let name = format!("meta.play[{k}]");
+            positive(&name, p, true)?;
+            if p > std::f64::consts::PI {
+                return Err(format!("{name} = {p} rad is more than a half turn"));
+            }
+        }
         match self.shard {
             Some([i, n]) if n == 0 || i >= n => Err(format!(
                 "shard [{i}, {n}]: shard i of n needs n >= 1 and i < n"
@@ -464,7 +471,7 @@ mod tests {
     #[test]
     fn degenerate_header_values_are_refused_by_field() {
         type Edit = fn(&mut serde_json::Value);
-        let cases: [(Edit, &str); 7] = [
+        let cases: [(Edit, &str); 9] = [
             (
                 |h| h["grid"]["axes"][0]["step"] = 1e308.into(),
                 "max (min + step",
@@ -487,6 +494,14 @@ mod tests {
                 "meta.force = 0 must be > 0",
             ),
             (|h| h["shard"] = serde_json::json!([5, 2]), "shard [5, 2]"),
+            (
+                |h| h["meta"]["play"] = serde_json::json!([0.005, -0.005, 0.0]),
+                "meta.play[1] = -0.005 must be >= 0",
+            ),
+            (
+                |h| h["meta"]["play"] = serde_json::json!([0.0, 0.0, 7.0]),
+                "meta.play[2] = 7 rad is more than a half turn",
+            ),
         ];
         for (edit, want) in cases {
             let e = roundtrip_err(&with_header(edit));
