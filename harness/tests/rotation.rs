@@ -188,15 +188,7 @@ fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
     // The geometry's: until a corner of the centred peg meets a flat of the hole.
     let play = m.rotational_play(2);
     let geometry = task.geometry().expect("a [geometry]");
-    let (mut fits, mut stuck) = (0.0, 0.1);
-    for _ in 0..60 {
-        let yaw = 0.5 * (fits + stuck);
-        if geometry.inserts_turned([0.0, 0.0], yaw) {
-            fits = yaw;
-        } else {
-            stuck = yaw;
-        }
-    }
+    let fits = ftmap::task::fit::largest(|yaw| geometry.inserts_turned([0.0, 0.0], yaw), 0.1);
     assert!(
         (play - fits).abs() < 0.01 * fits,
         "the map's yaw play {play} rad against the fit's {fits}"

@@ -7,7 +7,7 @@ use std::f64::consts::TAU;
 use ftmap::Task;
 use ftmap::exact::Pair;
 use ftmap::task::cad::{self, Geometry, Role};
-use ftmap::task::fit::{Fit, MeshFit, rotational_play};
+use ftmap::task::fit::{Fit, MeshFit, largest, rotational_play};
 use nalgebra::Vector3;
 
 /// The peg_in_hole task with 0.3 mm chamfers on the peg's tip and 0.5 mm on the hole's
@@ -72,20 +72,6 @@ fn the_meshes_alone_give_the_fit_of_the_dimensions() {
         assert!((ch - want).abs() < 2e-6, "{name}: chamfers {ch} vs {want}");
     }
     assert!(Fit::chamfers(chamfered().geometry().expect("geometry")) > 0.0);
-}
-
-/// The largest `x` in [0, `hi`] where `inside` holds, by bisection (it holds at 0).
-fn largest(inside: impl Fn(f64) -> bool, hi: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0, hi);
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if inside(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    lo
 }
 
 #[test]

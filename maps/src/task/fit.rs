@@ -159,7 +159,7 @@ impl MeshFit {
 /// The largest turn (rad) within which a fit's rotational play is looked for: a part that
 /// turns this far without touching (a round peg about its axis) has no play to state.
 const MAX_PLAY: f64 = 0.2;
-/// Halvings of the play's bracket: [`MAX_PLAY`] / 2^40, far below a nanoradian.
+/// Halvings of a bisection's bracket: [`MAX_PLAY`] / 2^40, far below a nanoradian.
 const PLAY_HALVINGS: usize = 40;
 
 /// The fit's rotational play about `axis` (goal frame) at zero offset, by parry's exact
@@ -193,21 +193,27 @@ pub fn rotational_play(pair: &Pair, approach: Vector3<f64>, axis: Vector3<f64>) 
         if free(sign * MAX_PLAY) {
             return None;
         }
-        let (mut lo, mut hi) = (0.0, MAX_PLAY);
-        for _ in 0..PLAY_HALVINGS {
-            let mid = 0.5 * (lo + hi);
-            if free(sign * mid) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        Some(lo)
+        Some(largest(|angle| free(sign * angle), MAX_PLAY))
     };
     one_way(1.0)
         .into_iter()
         .chain(one_way(-1.0))
         .reduce(f64::min)
+}
+
+/// The largest `x` in [0, `hi`] where `inside` holds, by bisection ([`PLAY_HALVINGS`]
+/// halvings): it holds at 0 and not at `hi`, and once it fails it fails beyond.
+pub fn largest(inside: impl Fn(f64) -> bool, hi: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0, hi);
+    for _ in 0..PLAY_HALVINGS {
+        let mid = 0.5 * (lo + hi);
+        if inside(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
 }
 
 /// `values` at [`DIRECTIONS`] even directions interpolated linearly at `theta`.
