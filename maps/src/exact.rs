@@ -1,6 +1,6 @@
 //! Exact queries between the two parts' meshes with parry, independent of the z-buffer: how
 //! far part A travels along a direction until it touches part B (a shape cast, good to some
-//! 30 micrometres, refined by exact mesh-to-mesh distances until they vanish).
+//! 30 micrometres, refined by bisection with exact intersection tests).
 
 use nalgebra::{Isometry3, Translation3, Vector3};
 use parry3d_f64::query::{self, ShapeCastOptions};
@@ -9,13 +9,11 @@ use parry3d_f64::shape::TriMesh;
 use crate::error::{MapError, Result};
 use crate::mesh::Mesh;
 
-/// How far the shape cast may stop short of or past the contact (m): the advance by exact
-/// distances starts this far before where it stopped.
+/// How far the shape cast may stop short of or past the contact (m): the bracket about
+/// where it stopped starts this far either side, and doubles until it holds the contact.
 const CAST_SLACK: f64 = 1e-4;
-/// Distance at which the advance counts as touching (m).
+/// Width of the bracket at which the travel counts as found (m).
 const CONVERGED: f64 = 1e-9;
-/// Advances at most: a contact at 80 degrees to the travel closes its gap by 17 % a step.
-const ADVANCES: usize = 200;
 
 /// Parts A and B as parry triangle meshes.
 pub struct Pair {
@@ -42,9 +40,11 @@ impl Pair {
 
     /// How far A at `from` travels along the unit vector `dir` until it touches B at
     /// `b_pose` (m), within `reach`; `None` when it does not. A must be clear of B at `from`.
-    /// Swept with parry's shape cast, then advanced by the exact distance between the meshes
-    /// until it vanishes: a distance never exceeds the gap along the travel, so no step
-    /// passes the contact.
+    /// Swept with parry's shape cast, then bracketed about where the cast stopped between a
+    /// pose clear of B and one touching it, and the bracket halved by parry's intersection
+    /// tests until it is [`CONVERGED`] wide: an intersection test stops at the first pair of
+    /// triangles that touch, where an exact distance between parts in a fit weighs every
+    /// pair of the walls that face each other.
     pub fn travel(
         &self,
         from: &Isometry3<f64>,
@@ -62,25 +62,45 @@ impl Pair {
             ShapeCastOptions::with_max_time_of_impact(reach),
         )
         .ok()??;
-        let at = |t: f64| Translation3::from(dir * t) * from;
-        let distance = |t: f64| query::distance(&at(t), &self.a, b_pose, &self.b).ok();
-        // Clear of B first: where the cast stopped past the contact, back off further.
-        let mut back_off = CAST_SLACK;
-        let mut t = (hit.time_of_impact - back_off).max(0.0);
-        let mut d = distance(t)?;
-        while d == 0.0 && t > 0.0 {
-            back_off *= 2.0;
-            t = (hit.time_of_impact - back_off).max(0.0);
-            d = distance(t)?;
-        }
-        for _ in 0..ADVANCES {
-            if d < CONVERGED {
-                break;
+        let toi = hit.time_of_impact;
+        let touching = |t: f64| {
+            query::intersection_test(
+                &(Translation3::from(dir * t) * from),
+                &self.a,
+                b_pose,
+                &self.b,
+            )
+            .ok()
+        };
+        // Clear of B below the bracket: where the cast stopped past the contact, back off further.
+        let mut slack = CAST_SLACK;
+        let mut lo = (toi - slack).max(0.0);
+        while touching(lo)? {
+            if lo == 0.0 {
+                return None;
             }
-            t += d;
-            d = distance(t)?;
+            slack *= 2.0;
+            lo = (toi - slack).max(0.0);
         }
-        Some(t)
+        // Touching above it: where the cast stopped short of the contact, look further.
+        let mut slack = CAST_SLACK;
+        let mut hi = toi + slack;
+        while !touching(hi)? {
+            if hi >= reach {
+                return None;
+            }
+            slack *= 2.0;
+            hi = (toi + slack).min(reach);
+        }
+        while hi - lo > CONVERGED {
+            let mid = 0.5 * (lo + hi);
+            if touching(mid)? {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        Some(lo)
     }
 }
 

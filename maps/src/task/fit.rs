@@ -163,7 +163,7 @@ const MAX_PLAY: f64 = 0.2;
 const PLAY_HALVINGS: usize = 40;
 
 /// The fit's rotational play about `axis` (goal frame) at zero offset, by parry's exact
-/// distances between the meshes of `pair`: how far part A, seated at the goal and turned
+/// intersection tests between the meshes of `pair`: how far part A, seated at the goal and turned
 /// about its frame's origin (the tip's centre), turns either way before it touches part B
 /// (the smaller way), its lowest point held [`LIFT`] above where it sat, so that a tilted
 /// tip's edge does not dig into a blind hole's floor. A position-controlled part goes in
@@ -184,7 +184,8 @@ pub fn rotational_play(pair: &Pair, approach: Vector3<f64>, axis: Vector3<f64>) 
     let free = |angle: f64| {
         let r = UnitQuaternion::from_axis_angle(&axis, angle);
         let pose = Isometry3::from_parts(Translation3::from(w * (seat - lowest(&r) + LIFT)), r);
-        query::distance(&pose, &pair.a, &Isometry3::identity(), &pair.b).is_ok_and(|d| d > 0.0)
+        query::intersection_test(&pose, &pair.a, &Isometry3::identity(), &pair.b)
+            .is_ok_and(|hit| !hit)
     };
     if !free(0.0) {
         return None;
