@@ -241,11 +241,21 @@ pub fn generate_with(
         mesh_b,
         model: opts.model,
     };
-    for rot_cell in (0..render_axes.len).filter(|r| r % shard_n == shard_i) {
-        let mut idx = [0usize; MAX_AXES];
-        render_axes.fill(rot_cell, &mut idx);
-        let cells = ctx.rotation_cell(&idx, &other_axes, progress)?;
-        for (cell, values) in cells {
+    // Rotation cells a few at a time on every core: a cell's renders are serial, and its
+    // contacts parallel; together they keep every core busy, with few cells' results held.
+    let rot_cells: Vec<usize> = (0..render_axes.len)
+        .filter(|r| r % shard_n == shard_i)
+        .collect();
+    for batch in rot_cells.chunks(2 * rayon::current_num_threads()) {
+        let results = batch
+            .par_iter()
+            .map(|&rot_cell| {
+                let mut idx = [0usize; MAX_AXES];
+                render_axes.fill(rot_cell, &mut idx);
+                ctx.rotation_cell(&idx, &other_axes, progress)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        for (cell, values) in results.into_iter().flatten() {
             *map.cell_mut(cell) = values;
         }
     }
