@@ -163,11 +163,11 @@ const MAX_PLAY: f64 = 0.2;
 const PLAY_HALVINGS: usize = 40;
 
 /// The fit's rotational play about `axis` (goal frame) at zero offset, by parry's exact
-/// intersection tests between the meshes of `pair`: how far part A, seated at the goal and turned
-/// about its frame's origin (the tip's centre), turns either way before it touches part B
-/// (the smaller way), its lowest point held [`LIFT`] above where it sat, so that a tilted
-/// tip's edge does not dig into a blind hole's floor. A position-controlled part goes in
-/// where its offset over the clearance and its rotation over this play sum to less than
+/// intersection tests between the meshes of `pair`: how far part A, seated at the goal and
+/// turned about its frame's origin (the tip's centre), turns either way before it touches
+/// part B (the smaller way), its lowest point held [`LIFT`] above where it sat, so that a
+/// tilted tip's edge does not dig into a blind hole's floor. A position-controlled part goes
+/// in where its offset over the clearance and its rotation over this play sum to less than
 /// one (to first order; a round peg tilted in its bore: the clearance over the depth).
 /// `None` where part A touches unturned or turns [`MAX_PLAY`] both ways freely.
 pub fn rotational_play(pair: &Pair, approach: Vector3<f64>, axis: Vector3<f64>) -> Option<f64> {
