@@ -106,7 +106,9 @@ impl DepthBackend for CpuBackend {
             solid: solid_rows(a),
             normals: Normals::of(b, b_normals),
         };
-        let ranges = RowRanges::of(b, &rows.solid);
+        // A single shift (a thin region again at the finer pixel) reads each of B's pixels
+        // under A once: tables over all of B would cost more than they save.
+        let ranges = RowRanges::of(b, if shifts.len() > 1 { &rows.solid } else { &[] });
         Ok(shifts
             .par_iter()
             .map_init(Vec::new, |scratch, &s| {
@@ -431,10 +433,11 @@ impl<'b> RowRanges<'b> {
     }
 
     /// The maximum and minimum of B's row `br` under solid run `s` starting at B column
-    /// `bcol`, where the run lies wholly within the row.
+    /// `bcol`, where the run lies wholly within the row and the tables reach its length.
     fn under(&self, s: Solid, br: usize, bcol: i64) -> Option<[f32; 2]> {
         let c = usize::try_from(bcol).ok()?;
-        (c + s.len <= self.width).then(|| self.window(br, c, s.len))
+        (c + s.len <= self.width && s.len.ilog2() as usize <= self.levels.len())
+            .then(|| self.window(br, c, s.len))
     }
 }
 
