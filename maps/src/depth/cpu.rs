@@ -597,6 +597,55 @@ mod tests {
     }
 
     #[test]
+    fn a_shift_reduced_alone_equals_the_same_shift_among_many() {
+        // A: a flat disc (solid rows, the sparse tables' case); B: a bumpy slope with a hole
+        // and two triangles' normals. One shift alone reads B's rows directly, many through
+        // the tables: the summaries must agree exactly.
+        let (w, r) = (24usize, 6i64);
+        let window = |i0: i64, width: usize| PixelWindow {
+            i0,
+            j0: i0,
+            width,
+            height: width,
+        };
+        let mut a = DepthImage::empty(window(0, w), 1.0, Surface::Bottom);
+        for (k, (h, t)) in a.height.iter_mut().zip(&mut a.tri).enumerate() {
+            let (x, y) = ((k % w) as f64 - 11.5, (k / w) as f64 - 11.5);
+            if x.hypot(y) < 10.0 {
+                (*h, *t) = (0.0, 0);
+            }
+        }
+        let bw = w + 2 * r as usize;
+        let mut b = DepthImage::empty(window(-r, bw), 1.0, Surface::Top);
+        for (k, (h, t)) in b.height.iter_mut().zip(&mut b.tri).enumerate() {
+            let (x, y) = ((k % bw) as f64 - 17.5, (k / bw) as f64 - 17.5);
+            if x.hypot(y) > 6.0 {
+                // A slope with bumps; rows above the middle share one triangle's normal.
+                *h = (-1e-3 * (0.3 * x + 0.2 * y) - 1e-4 * ((k * 7919) % 5) as f64) as f32;
+                *t = u32::from(y > 0.0 || x > 0.0);
+            }
+        }
+        let normals = [[0.0, 0.0, 1.0], [0.6, 0.0, 0.8]];
+        let shifts: Vec<Shift> = (-r..=r)
+            .flat_map(|dv| (-r..=r).map(move |du| Shift { du, dv }))
+            .collect();
+        let many = CpuBackend
+            .contacts(&a, &b, &normals, &shifts, 2e-3)
+            .expect("many shifts");
+        let disc = a.height.iter().filter(|h| h.is_finite()).count() as u32;
+        assert!(
+            many.iter().any(|c| c.count > 0 && c.count < disc),
+            "some shift touches in part"
+        );
+        for (s, want) in shifts.iter().zip(&many) {
+            let alone = CpuBackend
+                .contacts(&a, &b, &normals, &[*s], 2e-3)
+                .expect("one shift");
+            assert_eq!(&alone[0], want, "shift {s:?}");
+        }
+    }
+
+    #[test]
     fn row_ranges_equal_the_direct_maximum_and_minimum_of_every_window() {
         let (width, height) = (37, 3);
         let heights: Vec<f32> = (0..width * height)
