@@ -387,39 +387,44 @@ impl Context<'_> {
             .map(|(shift, c)| thin(c).then(|| Fine::windows(c, *shift, &setup)))
             .collect();
         let fine = Fine::render(self, view, [a_pose, b_pose], &windows, pixel)?;
-        let contacts: Vec<(ContactSummary, WrenchSetup)> = shifts
-            .par_iter()
-            .zip(summaries)
-            .zip(&windows)
-            .map(|((shift, c), w)| match (w, &fine) {
-                (Some(w), Some(fine)) => fine.contact(c, *shift, w, &setup, &b_normals),
-                _ => Ok((c, setup)),
-            })
-            .collect::<Result<_>>()?;
+        // Filled in place (every shift's slot known beforehand): a collection of unknown
+        // length would grow by copies, a large part of a map's time.
+        let mut contacts: Vec<(ContactSummary, WrenchSetup)> =
+            summaries.into_iter().map(|c| (c, setup)).collect();
+        if let Some(fine) = &fine {
+            (contacts.par_iter_mut().zip(&shifts).zip(&windows)).try_for_each(
+                |((slot, shift), w)| -> Result<()> {
+                    if let Some(w) = w {
+                        let c = std::mem::replace(&mut slot.0, ContactSummary::none(0.0));
+                        *slot = fine.contact(c, *shift, w, &setup, &b_normals)?;
+                    }
+                    Ok(())
+                },
+            )?;
+        }
         let s0 = Point3::from(self.task.contact.sensor_origin);
-        let out = cells
-            .par_iter()
-            .map(|(idx, shift, tw, t1)| {
-                let k = shifts
-                    .binary_search_by_key(&(shift.du, shift.dv), |s| (s.du, s.dv))
-                    .expect("every shift is listed");
-                let (c, setup) = &contacts[k];
-                let sensor = Point3::from(r1.inverse() * (s0 - t1).coords);
-                let cell = self.grid.flat(&idx[..self.grid.ndim()]);
-                let w = setup.wrench(c, self.model, &sensor).ok_or_else(|| {
-                    MapError::Geometry(format!(
-                        "part A misses part B at cell {:?}: enlarge part B or shrink Omega",
-                        self.grid.coords(cell)
-                    ))
-                })?;
-                let (f, t) = (r1 * w.force, r1 * w.torque);
-                let depth = tw - f64::from(c.gap);
-                Ok((
-                    cell,
-                    [f.x, f.y, f.z, t.x, t.y, t.z, depth].map(|x| x as f32),
+        let mut out = vec![(0, [0.0; NCH]); cells.len()];
+        (out.par_iter_mut().zip(&cells)).try_for_each(|(slot, (idx, shift, tw, t1))| {
+            let k = shifts
+                .binary_search_by_key(&(shift.du, shift.dv), |s| (s.du, s.dv))
+                .expect("every shift is listed");
+            let (c, setup) = &contacts[k];
+            let sensor = Point3::from(r1.inverse() * (s0 - t1).coords);
+            let cell = self.grid.flat(&idx[..self.grid.ndim()]);
+            let w = setup.wrench(c, self.model, &sensor).ok_or_else(|| {
+                MapError::Geometry(format!(
+                    "part A misses part B at cell {:?}: enlarge part B or shrink Omega",
+                    self.grid.coords(cell)
                 ))
-            })
-            .collect::<Result<Vec<_>>>()?;
+            })?;
+            let (f, t) = (r1 * w.force, r1 * w.torque);
+            let depth = tw - f64::from(c.gap);
+            *slot = (
+                cell,
+                [f.x, f.y, f.z, t.x, t.y, t.z, depth].map(|x| x as f32),
+            );
+            Ok(())
+        })?;
         progress(out.len() as u64);
         Ok(out)
     }

@@ -109,12 +109,27 @@ impl DepthBackend for CpuBackend {
         // A single shift (a thin region again at the finer pixel) reads each of B's pixels
         // under A once: tables over all of B would cost more than they save.
         let ranges = RowRanges::of(b, if shifts.len() > 1 { &rows.solid } else { &[] });
-        Ok(shifts
-            .par_iter()
-            .map_init(Vec::new, |scratch, &s| {
-                summarize(a, b, &rows, &ranges, s, tolerance, scratch)
-            })
-            .collect())
+        // Each strip fills its own slots of the output.
+        let mut out = vec![ContactSummary::none(f32::INFINITY); shifts.len()];
+        let mut rest = out.as_mut_slice();
+        let mut parts = Vec::new();
+        for strip in strips(shifts) {
+            let (slots, tail) = rest.split_at_mut(strip.range.len());
+            parts.push((strip, slots));
+            rest = tail;
+        }
+        parts.into_par_iter().for_each_init(
+            StripGaps::default,
+            |gaps, (Strip { range, step }, slots)| {
+                let strip = &shifts[range];
+                gaps.fill(a, b, &rows, &ranges, strip, step);
+                let n = strip.len();
+                for (j, (slot, &s)) in slots.iter_mut().zip(strip).enumerate() {
+                    *slot = summarize(a, b, &rows, s, tolerance, gaps, n - 1 - j);
+                }
+            },
+        );
+        Ok(out)
     }
 }
 
@@ -182,32 +197,34 @@ struct RowPair {
     brow_start: usize,
 }
 
-fn row_pairs<'s>(
-    a: &'s DepthImage,
-    b: &'s DepthImage,
-    spans: &'s RowSpans,
+/// A row's span `c0..=c1` clipped to B's columns (A column + `off_col` is B's column; B
+/// `bw` wide): outside B there is nothing to touch.
+fn clip(span: Option<(usize, usize)>, off_col: i64, bw: usize) -> Option<(usize, usize)> {
+    let (c0, c1) = span?;
+    let c0 = c0.max((-off_col).max(0) as usize);
+    let c1 = (c1 as i64).min(bw as i64 - 1 - off_col);
+    (c1 >= c0 as i64).then_some((c0, c1 as usize))
+}
+
+/// Row `r` of A against B under shift `s`, where it overlaps B.
+fn row_pair(
+    a: &DepthImage,
+    b: &DepthImage,
+    spans: &RowSpans,
     s: Shift,
-) -> impl Iterator<Item = RowPair> + 's {
+    r: usize,
+) -> Option<RowPair> {
     let off_col = a.window.i0 - s.du - b.window.i0;
-    let off_row = a.window.j0 - s.dv - b.window.j0;
-    spans.0.iter().enumerate().filter_map(move |(r, span)| {
-        let (c0, c1) = (*span)?;
-        let br = r as i64 + off_row;
-        if br < 0 || br >= b.window.height as i64 {
-            return None;
-        }
-        // Clip to B's columns: outside B there is nothing to touch.
-        let c0 = c0.max((-off_col).max(0) as usize);
-        let c1 = (c1 as i64).min(b.window.width as i64 - 1 - off_col);
-        if c1 < c0 as i64 {
-            return None;
-        }
-        Some(RowPair {
-            r,
-            c0,
-            c1: c1 as usize,
-            brow_start: (br as usize) * b.window.width + (c0 as i64 + off_col) as usize,
-        })
+    let br = r as i64 + a.window.j0 - s.dv - b.window.j0;
+    if br < 0 || br >= b.window.height as i64 {
+        return None;
+    }
+    let (c0, c1) = clip(spans.0[r], off_col, b.window.width)?;
+    Some(RowPair {
+        r,
+        c0,
+        c1,
+        brow_start: (br as usize) * b.window.width + (c0 as i64 + off_col) as usize,
     })
 }
 
@@ -376,35 +393,52 @@ fn solid_rows(a: &DepthImage) -> Vec<Option<Solid>> {
 /// of A under a shift has its minimal gap at the run's height minus the window's maximum
 /// (exact in floats: h - b decreases monotonically in b), and every pixel of the run in
 /// contact where the run's height minus the window's minimum is within the threshold.
-struct RowRanges<'b> {
+/// The tables are stored column by column: shifts along v read a window's maxima for
+/// consecutive rows of B from consecutive memory ([`StripGaps`]).
+struct RowRanges {
     /// B's width.
     width: usize,
-    /// B's heights: the level of windows of one pixel.
-    heights: &'b [f32],
-    /// Level k >= 1 at k - 1: per row, at column c, the maximum and the minimum of columns
-    /// c..c + 2^k.
+    /// B's height (rows).
+    height: usize,
+    /// Level k: at `c * height + r`, the maximum and the minimum of row r's columns
+    /// c..c + 2^k (level 0: B's heights). Empty when no solid row of A needs them.
     levels: Vec<[Vec<f32>; 2]>,
 }
 
-impl<'b> RowRanges<'b> {
+impl RowRanges {
     /// The tables of `b` up to the longest run of `solid`.
-    fn of(b: &'b DepthImage, solid: &[Option<Solid>]) -> Self {
-        let width = b.window.width;
+    fn of(b: &DepthImage, solid: &[Option<Solid>]) -> Self {
+        let (width, height) = (b.window.width, b.window.height);
         let longest = solid.iter().flatten().map(|s| s.len).max().unwrap_or(0);
         let mut ranges = Self {
             width,
-            heights: &b.height,
+            height,
             levels: Vec::new(),
         };
+        if longest == 0 {
+            return ranges;
+        }
+        let columns: Vec<f32> = (0..width)
+            .flat_map(|c| (0..height).map(move |r| b.height[r * width + c]))
+            .collect();
+        ranges.levels.push([columns.clone(), columns]);
         let mut span = 1;
         while 2 * span <= longest.min(width) {
-            let [hi, lo] = ranges.level(ranges.levels.len());
+            let [hi, lo] = &ranges.levels[ranges.levels.len() - 1];
             let next = |prev: &[f32], pick: fn(f32, f32) -> f32| -> Vec<f32> {
+                let column = |c: usize| &prev[c * height..(c + 1) * height];
                 let mut out = Vec::with_capacity(prev.len());
-                for row in prev.chunks_exact(width) {
-                    let (head, tail) = row.split_at(width - span);
-                    out.extend(head.iter().zip(&row[span..]).map(|(&x, &y)| pick(x, y)));
-                    out.extend_from_slice(tail);
+                for c in 0..width {
+                    if c + span < width {
+                        out.extend(
+                            column(c)
+                                .iter()
+                                .zip(column(c + span))
+                                .map(|(&x, &y)| pick(x, y)),
+                        );
+                    } else {
+                        out.extend_from_slice(column(c));
+                    }
                 }
                 out
             };
@@ -415,29 +449,22 @@ impl<'b> RowRanges<'b> {
         ranges
     }
 
-    /// Level `k`'s maxima and minima.
-    fn level(&self, k: usize) -> [&[f32]; 2] {
-        match k.checked_sub(1) {
-            None => [self.heights, self.heights],
-            Some(i) => [&self.levels[i][0], &self.levels[i][1]],
-        }
-    }
-
-    /// The maximum and minimum of B's row `r` over columns `c..c + len` (`len` >= 1 within
-    /// the tables' lengths, the window inside the row).
-    fn window(&self, r: usize, c: usize, len: usize) -> [f32; 2] {
-        let k = len.ilog2() as usize;
-        let [hi, lo] = self.level(k);
-        let (i, j) = (r * self.width + c, r * self.width + c + len - (1 << k));
-        [hi[i].max(hi[j]), lo[i].min(lo[j])]
-    }
-
-    /// The maximum and minimum of B's row `br` under solid run `s` starting at B column
-    /// `bcol`, where the run lies wholly within the row and the tables reach its length.
-    fn under(&self, s: Solid, br: usize, bcol: i64) -> Option<[f32; 2]> {
+    /// Whether the tables hold windows of `len` columns starting at B column `bcol`, and
+    /// if so that column.
+    fn column(&self, len: usize, bcol: i64) -> Option<usize> {
         let c = usize::try_from(bcol).ok()?;
-        (c + s.len <= self.width && s.len.ilog2() as usize <= self.levels.len())
-            .then(|| self.window(br, c, s.len))
+        (c + len <= self.width && (len.ilog2() as usize) < self.levels.len()).then_some(c)
+    }
+
+    /// The maxima and the minima of B's rows `rows` over columns `c..c + len`: per table,
+    /// the columns of the two power-of-two windows that cover it (maximum or minimum of
+    /// the pair, row by row).
+    fn columns(&self, rows: std::ops::Range<usize>, c: usize, len: usize) -> [[&[f32]; 2]; 2] {
+        let k = len.ilog2() as usize;
+        let (h, d) = (self.height, len - (1 << k));
+        let [hi, lo] = self.levels[k].each_ref().map(Vec::as_slice);
+        let at = |c: usize| c * h + rows.start..c * h + rows.end;
+        [[&hi[at(c)], &hi[at(c + d)]], [&lo[at(c)], &lo[at(c + d)]]]
     }
 }
 
@@ -449,74 +476,155 @@ struct Rows {
     normals: Normals,
 }
 
-/// A row of A against B under one shift.
-#[derive(Clone, Copy)]
-struct RowGap {
-    pair: RowPair,
-    /// The row's least gap.
-    min: f32,
-    /// For a solid row whose run lies within B's row, the greatest gap over the run: every
-    /// pixel of the run touches where that is within the threshold.
-    max: Option<f32>,
+/// Longest run of shifts that one pass over A's rows serves.
+const STRIP: usize = 64;
+
+/// A run of shifts with one du and dv rising by one step (the grid's interval in pixels).
+struct Strip {
+    /// Where it lies in the list of shifts.
+    range: std::ops::Range<usize>,
+    /// The step between its shifts' dv (1 for a single shift).
+    step: i64,
 }
 
-/// The contact summary of one shift; `ranges` serve its solid rows, `scratch` holds the
-/// rows' gaps.
+/// The list of shifts as strips, at most [`STRIP`] long, in list order.
+fn strips(shifts: &[Shift]) -> Vec<Strip> {
+    let mut out = Vec::new();
+    let (mut start, mut step) = (0, 1);
+    for k in 1..=shifts.len() {
+        let rise = k < shifts.len() && shifts[k].du == shifts[k - 1].du;
+        let rise = rise.then(|| shifts[k].dv - shifts[k - 1].dv);
+        match rise {
+            Some(d) if d > 0 && k - start == 1 => step = d,
+            Some(d) if d == step && k - start < STRIP => {}
+            _ => {
+                out.push(Strip {
+                    range: start..k,
+                    step,
+                });
+                (start, step) = (k, 1);
+            }
+        }
+    }
+    out
+}
+
+/// The first pass of the reduction over a [`Strip`]: per row of A and shift, the row's
+/// least gap to B (+inf where the row misses B), and per shift the least of them. Shift j
+/// of n is numbered t = n - 1 - j, so that a row's shifts run over B's rows upwards; a
+/// shift's rows lie together, so that the second pass reads them in order.
+#[derive(Default)]
+struct StripGaps {
+    /// A's height (rows).
+    height: usize,
+    /// At `t * height + r`: row r's least gap under shift t.
+    rows: Vec<f32>,
+    /// At `t * height + r`, for a solid row whose run lies within B's row: its greatest
+    /// gap (every pixel of the run touches where that is within the threshold); +inf for
+    /// other rows.
+    whole: Vec<f32>,
+    /// Per shift t, the least gap of all rows.
+    least: Vec<f32>,
+}
+
+impl StripGaps {
+    /// The gaps of the strip `strip` (consecutive dv, one du).
+    fn fill(
+        &mut self,
+        a: &DepthImage,
+        b: &DepthImage,
+        rows: &Rows,
+        ranges: &RowRanges,
+        strip: &[Shift],
+        step: i64,
+    ) {
+        let (n, h) = (strip.len(), a.window.height);
+        let (w, bw, bh) = (a.window.width, b.window.width, b.window.height as i64);
+        self.height = h;
+        self.rows.clear();
+        self.rows.resize(h * n, f32::INFINITY);
+        self.whole.clear();
+        self.whole.resize(h * n, f32::INFINITY);
+        let (du, top) = (strip[0].du, strip[n - 1].dv);
+        let off_col = a.window.i0 - du - b.window.i0;
+        for (r, span) in rows.spans.0.iter().enumerate() {
+            let Some((c0, c1)) = clip(*span, off_col, bw) else {
+                continue;
+            };
+            // B's row under shift t: `low + t step`, within B for t in t0..t1.
+            let low = r as i64 + a.window.j0 - top - b.window.j0;
+            let first_in = |edge: i64| (edge - low + step - 1).div_euclid(step);
+            let (t0, t1) = (first_in(0).max(0), first_in(bh).min(n as i64));
+            if t1 <= t0 {
+                continue;
+            }
+            let (t0, t1) = (t0 as usize, t1 as usize);
+            let brow = |t: usize| (low + t as i64 * step) as usize;
+            let (brows, every) = (brow(t0)..brow(t1 - 1) + 1, step as usize);
+            // Row r under shifts t0..t1.
+            let out = self.rows[t0 * h + r..].iter_mut().step_by(h);
+            let fast = rows.solid[r]
+                .and_then(|sd| Some((sd, ranges.column(sd.len, sd.first as i64 + off_col)?)));
+            if let Some((sd, c)) = fast {
+                let [[x, y], [p, q]] = ranges.columns(brows, c, sd.len);
+                let (x, y) = (x.iter().step_by(every), y.iter().step_by(every));
+                for ((o, &x), &y) in out.zip(x).zip(y) {
+                    *o = sd.height - x.max(y);
+                }
+                let whole = self.whole[t0 * h + r..].iter_mut().step_by(h);
+                let (p, q) = (p.iter().step_by(every), q.iter().step_by(every));
+                for ((o, &p), &q) in whole.zip(p).zip(q) {
+                    *o = sd.height - p.min(q);
+                }
+            } else {
+                let len = c1 - c0 + 1;
+                let arow = &a.height[r * w + c0..][..len];
+                let bcol = (c0 as i64 + off_col) as usize;
+                for (o, br) in out.zip(brows.step_by(every)) {
+                    *o = min_diff(arow, &b.height[br * bw + bcol..][..len]);
+                }
+            }
+        }
+        self.least.clear();
+        let least = |g: &[f32]| g.iter().copied().fold(f32::INFINITY, f32::min);
+        self.least.extend(self.rows.chunks_exact(h).map(least));
+    }
+}
+
+/// The contact summary of shift `s`, the strip's shift `t` in `gaps` (its first pass).
 fn summarize(
     a: &DepthImage,
     b: &DepthImage,
     rows: &Rows,
-    ranges: &RowRanges<'_>,
     s: Shift,
     tol: f32,
-    scratch: &mut Vec<RowGap>,
+    gaps: &StripGaps,
+    t: usize,
 ) -> ContactSummary {
-    let (w, bw, spans, bn) = (
-        a.window.width,
-        b.window.width,
-        &rows.spans,
-        &rows.normals.comp,
-    );
-    let off_col = a.window.i0 - s.du - b.window.i0;
-    let mut gap = f32::INFINITY;
-    let gaps = scratch;
-    gaps.clear();
-    for pair in row_pairs(a, b, spans, s) {
-        let n = pair.c1 - pair.c0 + 1;
-        let solid = rows.solid[pair.r];
-        let window = solid.and_then(|sd| {
-            let [hi, lo] = ranges.under(sd, pair.brow_start / bw, sd.first as i64 + off_col)?;
-            Some([sd.height - hi, sd.height - lo])
-        });
-        let (min, max) = match window {
-            Some([min, max]) => (min, Some(max)),
-            None => (
-                min_diff(
-                    &a.height[pair.r * w + pair.c0..][..n],
-                    &b.height[pair.brow_start..][..n],
-                ),
-                None,
-            ),
-        };
-        gap = gap.min(min);
-        gaps.push(RowGap { pair, min, max });
-    }
+    let (w, bw, bn) = (a.window.width, b.window.width, &rows.normals.comp);
+    let gap = gaps.least[t];
     let mut out = ContactSummary::none(gap);
     if !gap.is_finite() {
         return out;
     }
     let thr = gap + tol;
-    for &RowGap { pair: p, min, max } in gaps.iter() {
-        if min > thr {
+    let shift_rows = t * gaps.height..(t + 1) * gaps.height;
+    let whole = &gaps.whole[shift_rows.clone()];
+    for (r, &row_gap) in gaps.rows[shift_rows].iter().enumerate() {
+        // Rows that miss B have an infinite gap.
+        if row_gap > thr {
             continue;
         }
+        let Some(p) = row_pair(a, b, &rows.spans, s, r) else {
+            continue;
+        };
         let n = p.c1 - p.c0 + 1;
         let bs = p.brow_start;
         let (av, bv) = (&a.height[p.r * w + p.c0..][..n], &b.height[bs..bs + n]);
         let nv = [&bn[0][bs..bs + n], &bn[1][bs..bs + n], &bn[2][bs..bs + n]];
         let uniform = (rows.flat[p.r], rows.normals.row_uniform[bs / bw]);
         let r = match (uniform, rows.solid[p.r]) {
-            ((Some(h), Some(normal)), Some(sd)) if max.is_some_and(|m| m <= thr) => {
+            ((Some(h), Some(normal)), Some(sd)) if whole[r] <= thr => {
                 // The whole run touches: its sums in closed form (whole numbers, exact in
                 // f32 as the lanes' sums are).
                 let (first, count) = (sd.first as f32, sd.len as f32);
@@ -597,11 +705,13 @@ mod tests {
     }
 
     #[test]
-    fn a_shift_reduced_alone_equals_the_same_shift_among_many() {
+    fn shifts_reduced_in_strips_equal_each_shift_reduced_alone() {
         // A: a flat disc (solid rows, the sparse tables' case); B: a bumpy slope with a hole
-        // and two triangles' normals. One shift alone reads B's rows directly, many through
-        // the tables: the summaries must agree exactly.
-        let (w, r) = (24usize, 6i64);
+        // and two triangles' normals. One shift alone reads B's rows directly; many read
+        // the tables, in strips of dv rising by a step (one shift per strip where the list
+        // runs along u, up to `STRIP` where it runs along v, and split beyond): the
+        // summaries must agree exactly.
+        let (w, r, reach) = (24usize, 6i64, 40i64);
         let window = |i0: i64, width: usize| PixelWindow {
             i0,
             j0: i0,
@@ -615,20 +725,36 @@ mod tests {
                 (*h, *t) = (0.0, 0);
             }
         }
-        let bw = w + 2 * r as usize;
-        let mut b = DepthImage::empty(window(-r, bw), 1.0, Surface::Top);
+        let bw = w + 2 * reach as usize;
+        let middle = 0.5 * (bw - 1) as f64;
+        let mut b = DepthImage::empty(window(-reach, bw), 1.0, Surface::Top);
         for (k, (h, t)) in b.height.iter_mut().zip(&mut b.tri).enumerate() {
-            let (x, y) = ((k % bw) as f64 - 17.5, (k / bw) as f64 - 17.5);
+            let (x, y) = ((k % bw) as f64 - middle, (k / bw) as f64 - middle);
             if x.hypot(y) > 6.0 {
                 // A slope with bumps; rows above the middle share one triangle's normal.
-                *h = (-1e-3 * (0.3 * x + 0.2 * y) - 1e-4 * ((k * 7919) % 5) as f64) as f32;
+                *h = (-1e-3 * (0.05 * x + 0.2 * y) - 1e-4 * ((k * 7919) % 5) as f64) as f32;
                 *t = u32::from(y > 0.0 || x > 0.0);
             }
         }
         let normals = [[0.0, 0.0, 1.0], [0.6, 0.0, 0.8]];
-        let shifts: Vec<Shift> = (-r..=r)
-            .flat_map(|dv| (-r..=r).map(move |du| Shift { du, dv }))
+        let along_u = (-r..=r).flat_map(|dv| (-r..=r).map(move |du| Shift { du, dv }));
+        let along_v = [-reach, -r, 0, 3, reach]
+            .into_iter()
+            .flat_map(|du| (-reach..=reach).map(move |dv| Shift { du, dv }));
+        // A grid twice and three times the pixel: strips whose dv rises by 2 and 3.
+        let coarser = [(1, 2), (-2, 3)].into_iter().flat_map(|(du, step)| {
+            (-reach..=reach)
+                .step_by(step)
+                .map(move |dv| Shift { du, dv })
+        });
+        let shifts: Vec<Shift> = along_u.chain(along_v).chain(coarser).collect();
+        let strips: Vec<(usize, i64)> = strips(&shifts)
+            .iter()
+            .map(|s| (s.range.len(), s.step))
             .collect();
+        for strip in [(1, 1), (STRIP, 1), (17, 1), (41, 2), (27, 3)] {
+            assert!(strips.contains(&strip), "{strip:?} among {strips:?}");
+        }
         let many = CpuBackend
             .contacts(&a, &b, &normals, &shifts, 2e-3)
             .expect("many shifts");
@@ -636,6 +762,23 @@ mod tests {
         assert!(
             many.iter().any(|c| c.count > 0 && c.count < disc),
             "some shift touches in part"
+        );
+        // Whole rows in contact (their sums in closed form): a row's first and last contact
+        // at its run's ends.
+        let run = |row: usize| {
+            let h = &a.height[row * w..(row + 1) * w];
+            (
+                h.iter().position(|h| h.is_finite()),
+                h.iter().rposition(|h| h.is_finite()),
+            )
+        };
+        assert!(
+            many.iter()
+                .flat_map(|c| &c.rows)
+                .any(|&(row, first, last)| {
+                    run(row as usize) == (Some(first as usize), Some(last as usize))
+                }),
+            "some row touches all along"
         );
         for (s, want) in shifts.iter().zip(&many) {
             let alone = CpuBackend
@@ -668,17 +811,18 @@ mod tests {
             len: width,
         })];
         let ranges = RowRanges::of(&b, &solid);
-        for r in 0..height {
-            let row = &heights[r * width..(r + 1) * width];
-            for len in 1..=width {
-                for c in 0..=width - len {
-                    let w = &row[c..c + len];
+        for len in 1..=width {
+            for c in 0..=width - len {
+                // Every row at once, as a strip of shifts reads them.
+                let [[x, y], [p, q]] = ranges.columns(0..height, c, len);
+                for r in 0..height {
+                    let w = &heights[r * width + c..r * width + c + len];
                     let direct = [
                         w.iter().copied().fold(f32::NEG_INFINITY, f32::max),
                         w.iter().copied().fold(f32::INFINITY, f32::min),
                     ];
                     assert_eq!(
-                        ranges.window(r, c, len),
+                        [x[r].max(y[r]), p[r].min(q[r])],
                         direct,
                         "row {r}, {c}..{}",
                         c + len
@@ -686,13 +830,13 @@ mod tests {
                 }
             }
         }
-        let run = |len| Solid {
-            height: 0.0,
-            first: 0,
-            len,
-        };
-        assert_eq!(ranges.under(run(10), 0, 28), None, "past the row's end");
-        assert_eq!(ranges.under(run(10), 0, -1), None, "before its start");
-        assert!(ranges.under(run(10), 0, 27).is_some());
+        assert_eq!(ranges.column(10, 28), None, "past the row's end");
+        assert_eq!(ranges.column(10, -1), None, "before its start");
+        assert_eq!(ranges.column(10, 27), Some(27));
+        assert_eq!(
+            RowRanges::of(&b, &[None]).column(1, 0),
+            None,
+            "no tables without a solid row"
+        );
     }
 }
