@@ -105,6 +105,7 @@ impl DepthBackend for CpuBackend {
             flat: flat_rows(a),
             solid: solid_rows(a),
             normals: Normals::of(b, b_normals),
+            runs: Runs::of(b),
         };
         // A single shift (a thin region again at the finer pixel) reads each of B's pixels
         // under A once: tables over all of B would cost more than they save.
@@ -318,6 +319,68 @@ fn row_sums<const SUMS: bool>(
     out
 }
 
+/// B's rows with at most one run of equal height per this many pixels are summed run by
+/// run under a flat, unbroken row of A ([`run_sums`]); busier rows (a tilted face, a
+/// chamfer) pixel by pixel.
+const PIXELS_PER_RUN: usize = 16;
+
+/// B's rows as runs of equal height: a face across the approach, a hole's floor.
+struct Runs {
+    /// Per pixel of B, the column of B (exclusive) where its run ends.
+    end: Vec<u32>,
+    /// Per row of B, whether its runs are few ([`PIXELS_PER_RUN`]).
+    few: Vec<bool>,
+}
+
+impl Runs {
+    fn of(b: &DepthImage) -> Self {
+        let w = b.window.width;
+        let mut end = vec![0; b.height.len()];
+        let few = (b.height.chunks_exact(w).zip(end.chunks_exact_mut(w)))
+            .map(|(row, ends)| {
+                let (mut runs, mut e) = (1, w);
+                for c in (0..w).rev() {
+                    if c + 1 < w && row[c] != row[c + 1] {
+                        (runs, e) = (runs + 1, c + 1);
+                    }
+                    ends[c] = e as u32;
+                }
+                runs * PIXELS_PER_RUN <= w
+            })
+            .collect();
+        Self { end, few }
+    }
+}
+
+/// Contacts of a solid row of A at height `h` over B's pixels `b` (`ends`: their runs' ends
+/// as B columns, `b[0]` at B column `bcol`): pixels k with `h - b[k] <= thr`, a run at a
+/// time; columns counted from `col0`. Without the height and normal sums, as
+/// [`row_sums`]`::<false>`, and the same sums (whole numbers, exact in f32).
+fn run_sums(h: f32, b: &[f32], ends: &[u32], bcol: usize, thr: f32, col0: usize) -> RowSums {
+    let (mut count, mut sum_col) = (0usize, 0usize);
+    let (mut first, mut last) = (f32::INFINITY, f32::NEG_INFINITY);
+    let mut k = 0;
+    while k < b.len() {
+        let e = (ends[k] as usize - bcol).min(b.len());
+        if h - b[k] <= thr {
+            let (c0, c1) = (col0 + k, col0 + e - 1);
+            count += e - k;
+            sum_col += (c0 + c1) * (e - k) / 2;
+            first = first.min(c0 as f32);
+            last = c1 as f32;
+        }
+        k = e;
+    }
+    RowSums {
+        count: count as f32,
+        sum_col: sum_col as f32,
+        sum_height: 0.0,
+        normal: [0.0; 3],
+        first,
+        last,
+    }
+}
+
 /// B's contact normal per pixel, one image per component (zero where B has no surface),
 /// and per row the normal shared by all its pixels, if they share one.
 struct Normals {
@@ -474,6 +537,7 @@ struct Rows {
     flat: Vec<Option<f32>>,
     solid: Vec<Option<Solid>>,
     normals: Normals,
+    runs: Runs,
 }
 
 /// Longest run of shifts that one pass over A's rows serves.
@@ -622,7 +686,8 @@ fn summarize(
         let bs = p.brow_start;
         let (av, bv) = (&a.height[p.r * w + p.c0..][..n], &b.height[bs..bs + n]);
         let nv = [&bn[0][bs..bs + n], &bn[1][bs..bs + n], &bn[2][bs..bs + n]];
-        let uniform = (rows.flat[p.r], rows.normals.row_uniform[bs / bw]);
+        let brow = bs / bw;
+        let uniform = (rows.flat[p.r], rows.normals.row_uniform[brow]);
         let r = match (uniform, rows.solid[p.r]) {
             ((Some(h), Some(normal)), Some(sd)) if whole[r] <= thr => {
                 // The whole run touches: its sums in closed form (whole numbers, exact in
@@ -638,8 +703,19 @@ fn summarize(
                     last,
                 }
             }
-            ((Some(h), Some(normal)), _) => {
-                let mut r = row_sums::<false>(av, bv, nv, thr, p.c0 as f32);
+            ((Some(h), Some(normal)), solid) => {
+                let mut r = match solid.filter(|_| rows.runs.few[brow]) {
+                    // The run's pixels within B's row.
+                    Some(sd) => {
+                        let lo = sd.first.max(p.c0);
+                        let hi = (sd.first + sd.len).min(p.c1 + 1).max(lo);
+                        let at = bs + lo - p.c0..bs + hi - p.c0;
+                        let bcol = at.start - brow * bw;
+                        let ends = &rows.runs.end[at.clone()];
+                        run_sums(h, &b.height[at], ends, bcol, thr, lo)
+                    }
+                    None => row_sums::<false>(av, bv, nv, thr, p.c0 as f32),
+                };
                 r.sum_height = r.count * h;
                 r.normal = normal.map(|c| c * r.count);
                 r
@@ -786,6 +862,77 @@ mod tests {
                 .expect("one shift");
             assert_eq!(&alone[0], want, "shift {s:?}");
         }
+    }
+
+    #[test]
+    fn a_row_summed_run_by_run_equals_the_row_summed_pixel_by_pixel() {
+        // B's rows: runs of heights drawn from a few levels (one of them empty), each run 1
+        // to 40 pixels; row 3 changes height at every pixel. A flat row of A over every
+        // window of every row at thresholds between the levels.
+        let (width, height) = (120, 4);
+        let levels = [f32::NEG_INFINITY, 0.0, 1e-3, 2.5e-3, 4e-3];
+        let mut b = DepthImage::empty(
+            PixelWindow {
+                i0: 0,
+                j0: 0,
+                width,
+                height,
+            },
+            1.0,
+            Surface::Top,
+        );
+        let mut state = 12345u64;
+        let mut next = |m: usize| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as usize % m
+        };
+        for row in b.height.chunks_exact_mut(width).take(3) {
+            let mut c = 0;
+            while c < width {
+                let (len, level) = (1 + next(40), levels[next(levels.len())]);
+                row[c..(c + len).min(width)].fill(level);
+                c += len;
+            }
+        }
+        for (c, h) in b.height[3 * width..].iter_mut().enumerate() {
+            *h = 1e-4 * c as f32;
+        }
+        let runs = Runs::of(&b);
+        assert_eq!(runs.few, [true, true, true, false]);
+        let h = 5e-3;
+        let zeros = vec![0.0; width];
+        let (mut partial, mut windows) = (0, 0);
+        for r in 0..height {
+            for thr in [1e-3, 2e-3, 3.5e-3, 6e-3] {
+                for start in (0..width).step_by(7) {
+                    for len in [1, 5, 8, 23, 64, width - start] {
+                        if start + len > width {
+                            continue;
+                        }
+                        let at = r * width + start..r * width + start + len;
+                        let (bv, ends) = (&b.height[at.clone()], &runs.end[at]);
+                        let by_runs = run_sums(h, bv, ends, start, thr, start + 3);
+                        let nv = [&zeros[..len], &zeros[..len], &zeros[..len]];
+                        let av = vec![h; len];
+                        let by_pixels = row_sums::<false>(&av, bv, nv, thr, (start + 3) as f32);
+                        let sums = |s: &RowSums| (s.count, s.sum_col, s.first, s.last);
+                        assert_eq!(
+                            sums(&by_runs),
+                            sums(&by_pixels),
+                            "row {r} {start}+{len} at {thr}"
+                        );
+                        windows += 1;
+                        partial += usize::from(by_runs.count > 0.0 && by_runs.count < len as f32);
+                    }
+                }
+            }
+        }
+        assert!(
+            partial > windows / 8,
+            "{partial} of {windows} windows touch in part"
+        );
     }
 
     #[test]
