@@ -454,7 +454,7 @@ struct Fine<'a> {
 
 impl<'a> Fine<'a> {
     /// The finer windows of A and B for the contact `c` of B at `shift`: the box of its
-    /// contact pixels grown by [`REFINE_MARGIN`] coarse pixels, and B's beyond it by the
+    /// contact pixels grown by [`REFINE_MARGIN`] coarse pixels, and B's under it at the
     /// shift.
     fn windows(c: &ContactSummary, shift: Shift, coarse: &WrenchSetup) -> [PixelWindow; 2] {
         let (rows, cols) = c.rows.iter().fold(
@@ -477,12 +477,11 @@ impl<'a> Fine<'a> {
             width: span(cols).next_multiple_of(8),
             height: span(rows),
         };
-        let (du, dv) = (shift.du * REFINE, shift.dv * REFINE);
+        // B's pixels under A's at the shift: the only ones its reduction reads.
         let b = PixelWindow {
-            i0: a.i0 - du.abs(),
-            j0: a.j0 - dv.abs(),
-            width: a.width + 2 * du.unsigned_abs() as usize,
-            height: a.height + 2 * dv.unsigned_abs() as usize,
+            i0: a.i0 - shift.du * REFINE,
+            j0: a.j0 - shift.dv * REFINE,
+            ..a
         };
         [a, b]
     }
