@@ -100,16 +100,17 @@ impl DepthBackend for CpuBackend {
         shifts: &[Shift],
         tolerance: f32,
     ) -> Result<Vec<ContactSummary>> {
+        // A single shift (a thin region again at the finer pixel) reads each of B's pixels
+        // under A once: tables and runs over all of B would cost more than they save.
+        let many = shifts.len() > 1;
         let rows = Rows {
             spans: RowSpans::of(a),
             flat: flat_rows(a),
             solid: solid_rows(a),
             normals: Normals::of(b, b_normals),
-            runs: Runs::of(b),
+            runs: many.then(|| Runs::of(b)),
         };
-        // A single shift (a thin region again at the finer pixel) reads each of B's pixels
-        // under A once: tables over all of B would cost more than they save.
-        let ranges = RowRanges::of(b, if shifts.len() > 1 { &rows.solid } else { &[] });
+        let ranges = RowRanges::of(b, if many { &rows.solid } else { &[] });
         // Each strip fills its own slots of the output.
         let mut out = vec![ContactSummary::none(f32::INFINITY); shifts.len()];
         let mut rest = out.as_mut_slice();
@@ -333,6 +334,7 @@ struct Runs {
 }
 
 impl Runs {
+    /// The runs of `b`'s rows.
     fn of(b: &DepthImage) -> Self {
         let w = b.window.width;
         let mut end = vec![0; b.height.len()];
@@ -537,7 +539,8 @@ struct Rows {
     flat: Vec<Option<f32>>,
     solid: Vec<Option<Solid>>,
     normals: Normals,
-    runs: Runs,
+    /// B's runs, where more than one shift reads B.
+    runs: Option<Runs>,
 }
 
 /// Longest run of shifts that one pass over A's rows serves.
@@ -704,17 +707,18 @@ fn summarize(
                 }
             }
             ((Some(h), Some(normal)), solid) => {
-                let mut r = match solid.filter(|_| rows.runs.few[brow]) {
+                let runs = rows.runs.as_ref().filter(|runs| runs.few[brow]);
+                let mut r = match (solid, runs) {
                     // The run's pixels within B's row.
-                    Some(sd) => {
+                    (Some(sd), Some(runs)) => {
                         let lo = sd.first.max(p.c0);
                         let hi = (sd.first + sd.len).min(p.c1 + 1).max(lo);
                         let at = bs + lo - p.c0..bs + hi - p.c0;
                         let bcol = at.start - brow * bw;
-                        let ends = &rows.runs.end[at.clone()];
+                        let ends = &runs.end[at.clone()];
                         run_sums(h, &b.height[at], ends, bcol, thr, lo)
                     }
-                    None => row_sums::<false>(av, bv, nv, thr, p.c0 as f32),
+                    _ => row_sums::<false>(av, bv, nv, thr, p.c0 as f32),
                 };
                 r.sum_height = r.count * h;
                 r.normal = normal.map(|c| c * r.count);
@@ -864,6 +868,17 @@ mod tests {
         }
     }
 
+    /// An empty image of B's kind, `width` x `height` pixels at the origin.
+    fn top_image(width: usize, height: usize) -> DepthImage {
+        let window = PixelWindow {
+            i0: 0,
+            j0: 0,
+            width,
+            height,
+        };
+        DepthImage::empty(window, 1.0, Surface::Top)
+    }
+
     #[test]
     fn a_row_summed_run_by_run_equals_the_row_summed_pixel_by_pixel() {
         // B's rows: runs of heights drawn from a few levels (one of them empty), each run 1
@@ -871,16 +886,7 @@ mod tests {
         // window of every row at thresholds between the levels.
         let (width, height) = (120, 4);
         let levels = [f32::NEG_INFINITY, 0.0, 1e-3, 2.5e-3, 4e-3];
-        let mut b = DepthImage::empty(
-            PixelWindow {
-                i0: 0,
-                j0: 0,
-                width,
-                height,
-            },
-            1.0,
-            Surface::Top,
-        );
+        let mut b = top_image(width, height);
         let mut state = 12345u64;
         let mut next = |m: usize| {
             state = state
@@ -941,16 +947,7 @@ mod tests {
         let heights: Vec<f32> = (0..width * height)
             .map(|i| ((i * 7919) % 23) as f32 - if i % 5 == 0 { f32::INFINITY } else { 0.0 })
             .collect();
-        let mut b = DepthImage::empty(
-            PixelWindow {
-                i0: 0,
-                j0: 0,
-                width,
-                height,
-            },
-            1.0,
-            Surface::Top,
-        );
+        let mut b = top_image(width, height);
         b.height = heights.clone();
         let solid = [Some(Solid {
             height: 0.0,
