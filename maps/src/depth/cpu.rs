@@ -1,6 +1,8 @@
 //! The CPU depth backend, the reference: a scan-converting orthographic z-buffer
 //! rasterizer and the shifted-difference contact reduction, parallel with rayon.
 
+use std::sync::OnceLock;
+
 use rayon::prelude::*;
 use wide::f32x8;
 
@@ -262,7 +264,7 @@ struct RowSums {
 /// Contacts of one row: pixels k with `a[k] - b[k] <= thr`; columns counted from `col0`.
 /// Masks are applied bitwise, so empty pixels (infinite heights) never make a NaN.
 /// Without `SUMS` the height and normal sums are left 0 (the caller knows them: flat A
-/// row, one B normal).
+/// row, one B normal), and the normals `n` are not read.
 fn row_sums<const SUMS: bool>(
     a: &[f32],
     b: &[f32],
@@ -383,21 +385,20 @@ fn run_sums(h: f32, b: &[f32], ends: &[u32], bcol: usize, thr: f32, col0: usize)
     }
 }
 
-/// B's contact normal per pixel, one image per component (zero where B has no surface),
-/// and per row the normal shared by all its pixels, if they share one.
-struct Normals {
-    comp: [Vec<f32>; 3],
+/// B's contact normals: per row the normal shared by all its pixels, if they share one,
+/// and per pixel, built where a row's pixels are summed one by one.
+struct Normals<'b> {
+    /// B's triangle per pixel.
+    tri: &'b [u32],
+    /// The triangles' normals.
+    bn: &'b [[f32; 3]],
+    /// B's normal per pixel, one image per component (zero where B has no surface).
+    comp: OnceLock<[Vec<f32>; 3]>,
     row_uniform: Vec<Option<[f32; 3]>>,
 }
 
-impl Normals {
-    fn of(b: &DepthImage, bn: &[[f32; 3]]) -> Self {
-        let comp = |c: usize| {
-            b.tri
-                .iter()
-                .map(|&t| bn.get(t as usize).map_or(0.0, |n| n[c]))
-                .collect()
-        };
+impl<'b> Normals<'b> {
+    fn of(b: &'b DepthImage, bn: &'b [[f32; 3]]) -> Self {
         let w = b.window.width;
         let row_uniform = (0..b.window.height)
             .map(|r| {
@@ -409,9 +410,23 @@ impl Normals {
             })
             .collect();
         Self {
-            comp: [comp(0), comp(1), comp(2)],
+            tri: &b.tri,
+            bn,
+            comp: OnceLock::new(),
             row_uniform,
         }
+    }
+
+    /// B's normal per pixel, one image per component.
+    fn comp(&self) -> &[Vec<f32>; 3] {
+        self.comp.get_or_init(|| {
+            let comp = |c: usize| {
+                (self.tri.iter())
+                    .map(|&t| self.bn.get(t as usize).map_or(0.0, |n| n[c]))
+                    .collect()
+            };
+            [comp(0), comp(1), comp(2)]
+        })
     }
 }
 
@@ -534,11 +549,11 @@ impl RowRanges {
 }
 
 /// What the contact reduction precomputes once per image pair.
-struct Rows {
+struct Rows<'b> {
     spans: RowSpans,
     flat: Vec<Option<f32>>,
     solid: Vec<Option<Solid>>,
-    normals: Normals,
+    normals: Normals<'b>,
     /// B's runs, where more than one shift reads B.
     runs: Option<Runs>,
 }
@@ -600,7 +615,7 @@ impl StripGaps {
         &mut self,
         a: &DepthImage,
         b: &DepthImage,
-        rows: &Rows,
+        rows: &Rows<'_>,
         ranges: &RowRanges,
         strip: &[Shift],
         step: i64,
@@ -662,13 +677,13 @@ impl StripGaps {
 fn summarize(
     a: &DepthImage,
     b: &DepthImage,
-    rows: &Rows,
+    rows: &Rows<'_>,
     s: Shift,
     tol: f32,
     gaps: &StripGaps,
     t: usize,
 ) -> ContactSummary {
-    let (w, bw, bn) = (a.window.width, b.window.width, &rows.normals.comp);
+    let (w, bw) = (a.window.width, b.window.width);
     let gap = gaps.least[t];
     let mut out = ContactSummary::none(gap);
     if !gap.is_finite() {
@@ -688,7 +703,7 @@ fn summarize(
         let n = p.c1 - p.c0 + 1;
         let bs = p.brow_start;
         let (av, bv) = (&a.height[p.r * w + p.c0..][..n], &b.height[bs..bs + n]);
-        let nv = [&bn[0][bs..bs + n], &bn[1][bs..bs + n], &bn[2][bs..bs + n]];
+        let nv = || rows.normals.comp().each_ref().map(|c| &c[bs..bs + n]);
         let brow = bs / bw;
         let uniform = (rows.flat[p.r], rows.normals.row_uniform[brow]);
         let r = match (uniform, rows.solid[p.r]) {
@@ -718,13 +733,13 @@ fn summarize(
                         let ends = &runs.end[at.clone()];
                         run_sums(h, &b.height[at], ends, bcol, thr, lo)
                     }
-                    _ => row_sums::<false>(av, bv, nv, thr, p.c0 as f32),
+                    _ => row_sums::<false>(av, bv, [&[]; 3], thr, p.c0 as f32),
                 };
                 r.sum_height = r.count * h;
                 r.normal = normal.map(|c| c * r.count);
                 r
             }
-            _ => row_sums::<true>(av, bv, nv, thr, p.c0 as f32),
+            _ => row_sums::<true>(av, bv, nv(), thr, p.c0 as f32),
         };
         if r.count == 0.0 {
             continue;
