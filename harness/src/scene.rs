@@ -618,17 +618,84 @@ impl Piece {
     }
 }
 
+/// The most triangles MuJoCo's STL reader takes in one file.
+pub const MUJOCO_STL_TRIANGLES: usize = 200_000;
+
+/// A part's mesh as the scene shows it (a visual geom: it never collides).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Visual {
+    /// A binary STL file next to the scene, read as it is, in units of `scale` metres.
+    File {
+        /// Its path relative to the scene.
+        file: String,
+        /// Its unit in metres.
+        scale: f64,
+    },
+    /// A mesh MuJoCo cannot read as it is (ASCII STL): [`write_scene_of`] writes it as
+    /// binary STL in metres to `file` next to the scene.
+    Converted {
+        /// The copy's file name, next to the scene.
+        file: String,
+        /// The task's mesh file.
+        source: PathBuf,
+        /// The source's unit in metres.
+        scale: f64,
+    },
+    /// Not shown: the mesh has more triangles than MuJoCo's STL reader takes
+    /// ([`MUJOCO_STL_TRIANGLES`]).
+    Omitted {
+        /// The mesh's triangles.
+        triangles: usize,
+    },
+}
+
+impl Visual {
+    /// How the scene of a task in `dir` shows `part` (`role`: "a" or "b", naming a copy).
+    ///
+    /// # Errors
+    /// When the mesh file cannot be read.
+    fn of(part: &ftmap::task::Part, dir: &Path, role: &str) -> Result<Self> {
+        let bytes = std::fs::read(&part.mesh).map_err(|e| HarnessError::io(&part.mesh, e))?;
+        let binary = bytes.len() >= 84 && {
+            let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
+            bytes.len() == 84 + 50 * n
+        };
+        let scale = part.units.metres();
+        let triangles = if binary {
+            (bytes.len() - 84) / 50
+        } else {
+            part.load()?.faces.len()
+        };
+        Ok(if triangles > MUJOCO_STL_TRIANGLES {
+            Self::Omitted { triangles }
+        } else if binary {
+            let file = part.mesh.strip_prefix(dir).unwrap_or(&part.mesh);
+            Self::File {
+                file: file.to_string_lossy().into_owned(),
+                scale,
+            }
+        } else {
+            Self::Converted {
+                file: format!("visual_{role}.stl"),
+                source: part.mesh.clone(),
+                scale,
+            }
+        })
+    }
+
+    /// Whether the scene shows it.
+    fn shown(&self) -> bool {
+        !matches!(self, Self::Omitted { .. })
+    }
+}
+
 /// Everything a task's scene is generated from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneSpec {
     /// Task name.
     pub task: String,
-    /// Visual mesh of part A (file next to the scene).
-    pub mesh_a: String,
-    /// Visual mesh of part B.
-    pub mesh_b: String,
-    /// The visual meshes' units in metres (A, B).
-    pub mesh_scale: [f64; 2],
+    /// The meshes the scene shows of part A and part B (never colliding).
+    pub visual: [Visual; 2],
     /// Part A's contact face.
     pub face: Face,
     /// Part A's convex collision hulls besides the bed (chamfers, steps), task frame.
@@ -900,9 +967,10 @@ impl SceneSpec {
         };
         Ok(Self {
             task: task.name.clone(),
-            mesh_a: file(Role::A),
-            mesh_b: file(Role::B),
-            mesh_scale: [1.0; 2],
+            visual: [Role::A, Role::B].map(|r| Visual::File {
+                file: file(r),
+                scale: 1.0,
+            }),
             deviation: None,
             wedges: face.wedges(),
             solid: solid_of(&face)?,
@@ -923,17 +991,12 @@ impl SceneSpec {
     fn of_meshes(task: &Task) -> Result<Self> {
         let parts = crate::decompose::mesh_scene(task)?;
         let dir = task.path.parent().unwrap_or(Path::new("."));
-        let file = |p: &Path| {
-            p.strip_prefix(dir)
-                .unwrap_or(p)
-                .to_string_lossy()
-                .into_owned()
-        };
         Ok(Self {
             task: task.name.clone(),
-            mesh_a: file(&task.part_a.mesh),
-            mesh_b: file(&task.part_b.mesh),
-            mesh_scale: [&task.part_a, &task.part_b].map(|p| p.units.metres()),
+            visual: [
+                Visual::of(&task.part_a, dir, "a")?,
+                Visual::of(&task.part_b, dir, "b")?,
+            ],
             solid: solid_of(&parts.face)?,
             face: parts.face,
             wedges: parts.wedges,
@@ -1001,10 +1064,12 @@ impl SceneSpec {
         );
         let _ = writeln!(x, "  </default>");
         let _ = writeln!(x, "  <asset>");
-        for (name, file, scale) in [
-            ("visual_a", &self.mesh_a, self.mesh_scale[0]),
-            ("visual_b", &self.mesh_b, self.mesh_scale[1]),
-        ] {
+        for (name, visual) in ["visual_a", "visual_b"].iter().zip(&self.visual) {
+            let (file, scale) = match visual {
+                Visual::File { file, scale } => (file, *scale),
+                Visual::Converted { file, .. } => (file, 1.0),
+                Visual::Omitted { .. } => continue,
+            };
             let scale = if scale == 1.0 {
                 String::new()
             } else {
@@ -1059,10 +1124,12 @@ impl SceneSpec {
         } else {
             ("0.5", "")
         };
-        let _ = writeln!(
-            x,
-            "      <geom name=\"visual_b\" class=\"visual\" type=\"mesh\" mesh=\"visual_b\" rgba=\"0.45 0.5 0.6 {alpha_b}\"/>"
-        );
+        if self.visual[1].shown() {
+            let _ = writeln!(
+                x,
+                "      <geom name=\"visual_b\" class=\"visual\" type=\"mesh\" mesh=\"visual_b\" rgba=\"0.45 0.5 0.6 {alpha_b}\"/>"
+            );
+        }
         for (i, p) in self.pieces.iter().enumerate() {
             let _ = writeln!(
                 x,
@@ -1121,10 +1188,12 @@ impl SceneSpec {
             x,
             "        <inertial pos=\"0 0 0.02\" mass=\"0.05\" diaginertia=\"1e-5 1e-5 1e-5\"/>"
         );
-        let _ = writeln!(
-            x,
-            "        <geom name=\"visual_a\" class=\"visual\" type=\"mesh\" mesh=\"visual_a\" rgba=\"0.8 0.6 0.3 1\"/>"
-        );
+        if self.visual[0].shown() {
+            let _ = writeln!(
+                x,
+                "        <geom name=\"visual_a\" class=\"visual\" type=\"mesh\" mesh=\"visual_a\" rgba=\"0.8 0.6 0.3 1\"/>"
+            );
+        }
         // The spheres take precedence in their contacts' parameters (priority), with a
         // direct stiffness in proportion to the area each stands for.
         let cell = self.face.cell_area();
@@ -1251,14 +1320,34 @@ pub fn write_scene(task: &Task) -> Result<PathBuf> {
 /// When the file cannot be written.
 pub fn write_scene_of(task: &Task, spec: &SceneSpec) -> Result<PathBuf> {
     let path = scene_path(task);
+    for visual in &spec.visual {
+        if let Visual::Converted {
+            file,
+            source,
+            scale,
+        } = visual
+        {
+            let mesh = ftmap::mesh::Mesh::load_scaled(source, *scale)?;
+            let triangles: Vec<[[f32; 3]; 3]> = (0..mesh.faces.len())
+                .map(|i| mesh.triangle(i).map(|p| [p.x, p.y, p.z].map(|c| c as f32)))
+                .collect();
+            write_whole(&path.with_file_name(file), &cad::stl_bytes(&triangles))?;
+        }
+    }
+    write_whole(&path, spec.mjcf().as_bytes())?;
+    Ok(path)
+}
+
+/// Writes `bytes` to `path` whole or not at all: a temporary file renamed over it.
+fn write_whole(path: &Path, bytes: &[u8]) -> Result<()> {
     let tmp = path.with_extension(format!(
-        "xml.{}-{:?}.tmp",
+        "{}.{}-{:?}.tmp",
+        path.extension().and_then(|e| e.to_str()).unwrap_or(""),
         std::process::id(),
         std::thread::current().id()
     ));
-    std::fs::write(&tmp, spec.mjcf()).map_err(|e| HarnessError::io(&tmp, e))?;
-    std::fs::rename(&tmp, &path).map_err(|e| HarnessError::io(&path, e))?;
-    Ok(path)
+    std::fs::write(&tmp, bytes).map_err(|e| HarnessError::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| HarnessError::io(path, e))
 }
 
 /// Whether a task's committed scene file equals what its `task.toml` generates.

@@ -1,7 +1,8 @@
 //! Scenes for parts given by their meshes alone: a task made by `ftmap task new` from the
 //! peg_in_hole STLs gets a scene whose clearance is the parametric scene's within the bound,
 //! and a 5-trial campaign in it succeeds in every trial; a part B with a cavity under its
-//! top (no height field along the approach) gets no scene, and the error says why.
+//! top (no height field along the approach) gets no scene, and the error says why; meshes in
+//! ASCII STL and millimetres get a scene that MuJoCo loads.
 
 use std::path::{Path, PathBuf};
 
@@ -12,7 +13,7 @@ use ftmap::task::create::{NewTask, create};
 use harness::campaign::{random_offsets, run_campaign};
 use harness::decompose::{BOUND, mesh_scene};
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
-use harness::scene::{Piece, SPHERE_RADIUS, SceneSpec};
+use harness::scene::{Piece, SPHERE_RADIUS, SceneSpec, Visual};
 use harness::sensor::Noise;
 use harness::sim::{Sim, regenerate_scene};
 use harness::trial::{Strategy, TrialConfig, Truth};
@@ -184,5 +185,67 @@ fn a_part_b_with_a_cavity_under_its_top_gets_no_scene_and_is_told_why() {
     task.part_b.mesh = path;
     let e = mesh_scene(&task).expect_err("no scene").to_string();
     assert!(e.contains("not a height field") && e.contains("µm"), "{e}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// `path`'s triangles written as ASCII STL, coordinates times `scale`.
+fn ascii_stl(path: &Path, scale: f64, out: &Path) {
+    let mesh = ftmap::mesh::Mesh::load(path).expect("mesh");
+    let mut text = String::from("solid part\n");
+    for i in 0..mesh.faces.len() {
+        text.push_str(" facet normal 0 0 0\n  outer loop\n");
+        for p in mesh.triangle(i) {
+            let v = p.coords * scale;
+            text.push_str(&format!("   vertex {} {} {}\n", v.x, v.y, v.z));
+        }
+        text.push_str("  endloop\n endfacet\n");
+    }
+    text.push_str("endsolid part\n");
+    std::fs::write(out, text).expect("write");
+}
+
+#[test]
+fn meshes_in_ascii_stl_and_millimetres_get_a_scene_that_mujoco_loads() {
+    // MuJoCo reads binary STL only: the scene shows a binary copy in metres, and its
+    // collision geometry is made as from the binary files in metres.
+    let dir = scratch("ascii");
+    let peg = Task::find("peg_in_hole").expect("task");
+    let (a, b) = (dir.join("peg_mm.stl"), dir.join("block_mm.stl"));
+    ascii_stl(&peg.part_a.mesh, 1000.0, &a);
+    ascii_stl(&peg.part_b.mesh, 1000.0, &b);
+    let (task, _) = create(&NewTask {
+        part_a: a,
+        part_b: b,
+        units: Units::Mm,
+        out: dir.join("ascii_peg"),
+        approach: [0.0, 0.0, -1.0],
+        force: 50.0,
+        friction: 0.3,
+        size: None,
+    })
+    .expect("task new");
+    let spec = SceneSpec::of_task(&task).expect("a scene from the meshes");
+    let pieces = SceneSpec::of_task(&mypeg()).expect("scene").pieces.len();
+    assert_eq!(
+        spec.pieces.len(),
+        pieces,
+        "as many pieces as from the metres"
+    );
+    let path = regenerate_scene(&task).expect("the scene loads in MuJoCo");
+    for (visual, original) in spec.visual.iter().zip([&peg.part_a.mesh, &peg.part_b.mesh]) {
+        let Visual::Converted { file, .. } = visual else {
+            panic!("{visual:?}: an ASCII file is shown as a binary copy");
+        };
+        let copy = ftmap::mesh::Mesh::load(&path.with_file_name(file)).expect("the copy");
+        let original = ftmap::mesh::Mesh::load(original).expect("mesh");
+        assert_eq!(copy.faces.len(), original.faces.len());
+        let far = (copy.vertices.iter().zip(&original.vertices))
+            .map(|(p, q)| (p - q).norm())
+            .fold(0.0, f64::max);
+        assert!(
+            far < 1e-9,
+            "the copy is {far} m off the metres it stands for"
+        );
+    }
     std::fs::remove_dir_all(dir).ok();
 }
