@@ -632,7 +632,8 @@ pub enum Visual {
         scale: f64,
     },
     /// A mesh MuJoCo cannot read as it is (ASCII STL): [`write_scene_of`] writes it as
-    /// binary STL in metres to `file` next to the scene.
+    /// binary STL in metres to `file` next to the scene (`<stem>.visual_a.stl` for part A's
+    /// `<stem>.stl`).
     Converted {
         /// The copy's file name, next to the scene.
         file: String,
@@ -675,8 +676,14 @@ impl Visual {
                 scale,
             }
         } else {
+            // Named after the source and the part, so that it never writes over either
+            // part's file.
+            let stem = part
+                .mesh
+                .file_stem()
+                .map_or("part".into(), |s| s.to_string_lossy());
             Self::Converted {
-                file: format!("visual_{role}.stl"),
+                file: format!("{stem}.visual_{role}.stl"),
                 source: part.mesh.clone(),
                 scale,
             }

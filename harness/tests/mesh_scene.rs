@@ -234,6 +234,14 @@ fn meshes_in_ascii_stl_and_millimetres_get_a_scene_that_mujoco_loads() {
         "as many pieces as from the metres"
     );
     let path = regenerate_scene(&task).expect("the scene loads in MuJoCo");
+    for part in [&task.part_a, &task.part_b] {
+        let text = std::fs::read(&part.mesh).expect("the task's mesh");
+        assert!(
+            text.starts_with(b"solid part"),
+            "{:?} kept as given",
+            part.mesh
+        );
+    }
     for (visual, original) in spec.visual.iter().zip([&peg.part_a.mesh, &peg.part_b.mesh]) {
         let Visual::Converted { file, .. } = visual else {
             panic!("{visual:?}: an ASCII file is shown as a binary copy");
