@@ -95,7 +95,10 @@ fn near_the_hole_a_turned_octagon_reads_the_torque_of_its_polygons() {
     // less the hole under uniform pressure (the map's centroid model), computed from the
     // two octagons. Read as soon as the press stopped moving, 0.2 mm off MuJoCo gave
     // (-0.050, 0.207) N.m for (-0.012, 0.198): the contacts' damping still held the load
-    // by sphere count (20 % off, 25 % at 0.03 mm). Read once the torque has settled: 5-11 %.
+    // by sphere count (20 % off, 25 % at 0.03 mm). Read once the torque has held still over
+    // 10 ms: 5.5-10.8 %; over 30 ms (`sim::TORQUE_WINDOW`): 4.5-12.7 %, nearer MuJoCo's rest,
+    // which 0.03 mm off is 13.3 % from the polygons (the corner patches stand on a few
+    // spheres each; held 0.3 s), where the 10 ms reading caught the torque on its way there.
     let (task, mut sim) = common::scene("octagon_yaw");
     let [peg_across_flats, hole_across_flats] = common::octagon_flats(&task);
     for (r, direction, yaw) in [
@@ -117,7 +120,7 @@ fn near_the_hole_a_turned_octagon_reads_the_torque_of_its_polygons() {
         );
         let size = exact[0].hypot(exact[1]);
         assert!(
-            (w[3] - exact[0]).hypot(w[4] - exact[1]) < 0.12 * size,
+            (w[3] - exact[0]).hypot(w[4] - exact[1]) < 0.15 * size,
             "{r} m along {direction} deg, yaw {yaw} deg: MuJoCo {w:?}, polygons {exact:?}"
         );
     }
