@@ -31,6 +31,7 @@ from fmpy.fmi2 import FMU2Slave
 
 ROOT = Path(__file__).resolve().parent.parent
 MAX_TIME, SETTLE_SPEED, SETTLE_TIME, SETTLE_TORQUE, DROP_DEPTH = 2.0, 1.0e-4, 0.01, 1.0e-3, 0.00001
+TORQUE_WINDOW = 0.03
 APPROACH_CLEARANCE, ENTRY_DEPTH, INSERTION_SPEED, INSERTION_TIME = 0.0001, 0.0001, 0.1, 0.01
 SUCCESS_HEIGHT = 0.001
 STEP = 0.001
@@ -63,7 +64,9 @@ class Cell:
             d.qpos[q] = v
         for a, v in zip(self.act, (xy[0], xy[1], -self.force, 0.0)):
             d.ctrl[a] = v
-        max_steps, settle_steps = round(MAX_TIME / m.opt.timestep), round(SETTLE_TIME / m.opt.timestep)
+        max_steps = round(MAX_TIME / m.opt.timestep)
+        settle_steps = round(SETTLE_TIME / m.opt.timestep)
+        torque_steps = round(TORQUE_WINDOW / m.opt.timestep)
         calm = steps = 0
         first, calm_torque = None, None
         while steps < max_steps:
@@ -78,17 +81,20 @@ class Cell:
                 calm += 1
             elif first is None:
                 calm = 0
-            if calm < settle_steps:
+            if calm < (torque_steps if first is not None else settle_steps):
                 continue
             if z > self.entered:
                 # Read once the torque has settled too: it moved less than SETTLE_TORQUE
-                # over a settling window, unless part A dropped since the speed settled.
+                # over a window of TORQUE_WINDOW from when the speed settled, unless part A
+                # dropped since the speed settled (the harness's `sim::TORQUE_WINDOW`).
                 now = self.read()
+                window = first is not None
                 if first is None:
                     first = now
                 if first[1][2] - z > DROP_DEPTH:
                     break
-                if sum((a - b) ** 2 for a, b in zip(now[0][3:], calm_torque)) ** 0.5 >= SETTLE_TORQUE:
+                moved = sum((a - b) ** 2 for a, b in zip(now[0][3:], calm_torque)) ** 0.5
+                if not window or moved >= SETTLE_TORQUE:
                     calm_torque, calm = now[0][3:], 1
                     continue
                 first = now
