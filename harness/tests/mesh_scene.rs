@@ -29,14 +29,14 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// A task made by `ftmap task new` from the peg_in_hole STLs alone.
-fn mypeg() -> Task {
-    let peg = Task::find("peg_in_hole").expect("task");
+/// The task `ftmap task new` makes in `out` from the meshes `part_a` and `part_b` in
+/// `units`, with its default approach, force, friction and Omega.
+fn task_new(part_a: PathBuf, part_b: PathBuf, units: Units, out: PathBuf) -> Task {
     create(&NewTask {
-        part_a: peg.part_a.mesh.clone(),
-        part_b: peg.part_b.mesh.clone(),
-        units: Units::M,
-        out: scratch("task").join("mypeg"),
+        part_a,
+        part_b,
+        units,
+        out,
         approach: [0.0, 0.0, -1.0],
         force: 50.0,
         friction: 0.3,
@@ -44,6 +44,17 @@ fn mypeg() -> Task {
     })
     .expect("task new")
     .0
+}
+
+/// A task made by `ftmap task new` from the peg_in_hole STLs alone.
+fn mypeg() -> Task {
+    let peg = Task::find("peg_in_hole").expect("task");
+    task_new(
+        peg.part_a.mesh.clone(),
+        peg.part_b.mesh.clone(),
+        Units::M,
+        scratch("task").join("mypeg"),
+    )
 }
 
 /// A scene's pieces as parry shapes (boxes and hulls: what the peg scenes use).
@@ -215,17 +226,7 @@ fn meshes_in_ascii_stl_and_millimetres_get_a_scene_that_mujoco_loads() {
     let (a, b) = (dir.join("peg_mm.stl"), dir.join("block_mm.stl"));
     ascii_stl(&peg.part_a.mesh, 1000.0, &a);
     ascii_stl(&peg.part_b.mesh, 1000.0, &b);
-    let (task, _) = create(&NewTask {
-        part_a: a,
-        part_b: b,
-        units: Units::Mm,
-        out: dir.join("ascii_peg"),
-        approach: [0.0, 0.0, -1.0],
-        force: 50.0,
-        friction: 0.3,
-        size: None,
-    })
-    .expect("task new");
+    let task = task_new(a, b, Units::Mm, dir.join("ascii_peg"));
     let spec = SceneSpec::of_task(&task).expect("a scene from the meshes");
     let pieces = SceneSpec::of_task(&mypeg()).expect("scene").pieces.len();
     assert_eq!(
@@ -322,17 +323,7 @@ fn a_square_peg_across_a_flat_reads_the_share_of_its_thinnest_strip() {
         cad::stl_bytes(&square_block(0.015, 0.00406, -0.01, 0.0, 0.008)),
     )
     .expect("write");
-    let (task, _) = create(&NewTask {
-        part_a: peg,
-        part_b: block,
-        units: Units::M,
-        out: dir.join("square"),
-        approach: [0.0, 0.0, -1.0],
-        force: 50.0,
-        friction: 0.3,
-        size: None,
-    })
-    .expect("task new");
+    let task = task_new(peg, block, Units::M, dir.join("square"));
     regenerate_scene(&task).expect("the scene loads in MuJoCo");
     let mut sim = Sim::of_task(&task).expect("the scene");
     let (a, h) = (0.004, 0.00406);
