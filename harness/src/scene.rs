@@ -51,6 +51,9 @@ pub const SPHERE_RADIUS: f64 = 0.000002;
 pub const FIRST_BAND: f64 = 0.000005;
 /// The van der Corput depths of a ring's spheres are centred in bins of this many.
 const RING_DEPTHS: f64 = 64.0;
+/// An outline turning by more than this at a vertex (rad) has a corner there: the bed's
+/// rings are spaced along the straight stretches between corners.
+const CORNER_TURN: f64 = 10.0 * PI / 180.0;
 /// Sub-samples per side of a lattice cell where it meets the rings' bands.
 const CELL_SAMPLES: usize = 8;
 /// Direct contact stiffness and damping of a sphere standing for a lattice cell (MuJoCo's
@@ -227,16 +230,25 @@ impl Outline {
         }
     }
 
-    /// Points along the outline, spaced at most `pitch` along it moved `offset` outwards
-    /// (negative: inwards), point `j` moved by `offset_of(j)` instead.
-    fn ring(&self, offset: f64, pitch: f64, offset_of: impl Fn(usize) -> f64) -> Vec<[f64; 2]> {
+    /// Points along the outline moved `offset` outwards (negative: inwards), each with the
+    /// length of outline it stands for (its weight). They lie at most `pitch` apart, centred
+    /// on each straight stretch between corners ([`CORNER_TURN`]); a point is moved by
+    /// `offset_of(j)` instead, `j` counting on from stretch to stretch and within one from
+    /// both ends to its middle (a circle's points: in turn), so that the points of a strip
+    /// of the face along a flat, moved or not, have their centroid where the strip's is.
+    fn ring(
+        &self,
+        offset: f64,
+        pitch: f64,
+        offset_of: impl Fn(usize) -> f64,
+    ) -> Vec<([f64; 2], f64)> {
         match self {
             Self::Circle(r) => {
                 let n = (TAU * (r + offset) / pitch).ceil().max(3.0) as usize;
                 (0..n)
                     .map(|i| {
                         let (t, r) = (TAU * i as f64 / n as f64, r + offset_of(i));
-                        [r * t.cos(), r * t.sin()]
+                        ([r * t.cos(), r * t.sin()], 1.0)
                     })
                     .collect()
             }
@@ -244,49 +256,86 @@ impl Outline {
                 // Regular polygons about the axis: scale by the apothem change.
                 let apothem = self.inside([0.0, 0.0]);
                 let scale = |offset: f64| (apothem + offset) / apothem;
-                let mut pts = Vec::new();
+                let (mut pts, mut base) = (Vec::new(), 0);
                 for i in 0..v.len() {
                     let (a, b) = (v[i], v[(i + 1) % v.len()]);
                     let len = (b[0] - a[0]).hypot(b[1] - a[1]) * scale(offset);
                     let n = (len / pitch).ceil().max(1.0) as usize;
                     for k in 0..n {
-                        let (t, s) = (k as f64 / n as f64, scale(offset_of(pts.len())));
-                        pts.push([
-                            s * (a[0] + t * (b[0] - a[0])),
-                            s * (a[1] + t * (b[1] - a[1])),
-                        ]);
+                        let t = (k as f64 + 0.5) / n as f64;
+                        let s = scale(offset_of(base + k.min(n - 1 - k)));
+                        pts.push((
+                            [
+                                s * (a[0] + t * (b[0] - a[0])),
+                                s * (a[1] + t * (b[1] - a[1])),
+                            ],
+                            1.0,
+                        ));
                     }
+                    base += n.div_ceil(2);
                 }
                 pts
             }
             Self::Loop(v) => {
-                // Evenly along the loop by arc length, each point along its edge's normal;
-                // one that lands nearer another edge (by a reflex corner) is left out.
-                let total = perimeter(v);
-                let n = (total / pitch).ceil().max(3.0) as usize;
-                let (mut pts, mut edge, mut start) = (Vec::new(), 0, 0.0);
-                for j in 0..n {
-                    let s = total * j as f64 / n as f64;
-                    while s > start + edge_length(v, edge) && edge + 1 < v.len() {
-                        start += edge_length(v, edge);
-                        edge += 1;
+                // Evenly by arc length along each run of edges between corners, each point
+                // along its edge's normal; one that lands nearer another edge (by a reflex
+                // corner) is left out.
+                let (mut pts, mut base) = (Vec::new(), 0);
+                for run in runs(v) {
+                    let total: f64 = run.iter().map(|&e| edge_length(v, e)).sum();
+                    let n = (total / pitch).ceil().max(1.0) as usize;
+                    let (mut at, mut start) = (0, 0.0);
+                    for k in 0..n {
+                        let s = total * (k as f64 + 0.5) / n as f64;
+                        while s > start + edge_length(v, run[at]) && at + 1 < run.len() {
+                            start += edge_length(v, run[at]);
+                            at += 1;
+                        }
+                        let edge = run[at];
+                        let (a, b) = (v[edge], v[(edge + 1) % v.len()]);
+                        let t = (s - start) / edge_length(v, edge);
+                        let normal = edge_normal(v, edge);
+                        let d = offset_of(base + k.min(n - 1 - k));
+                        let q = [
+                            a[0] + t * (b[0] - a[0]) + d * normal[0],
+                            a[1] + t * (b[1] - a[1]) + d * normal[1],
+                        ];
+                        if (self.inside(q) + d).abs() <= 0.25 * d.abs() + 1e-9 {
+                            pts.push((q, total / n as f64));
+                        }
                     }
-                    let (a, b) = (v[edge], v[(edge + 1) % v.len()]);
-                    let t = (s - start) / edge_length(v, edge);
-                    let normal = edge_normal(v, edge);
-                    let d = offset_of(j);
-                    let q = [
-                        a[0] + t * (b[0] - a[0]) + d * normal[0],
-                        a[1] + t * (b[1] - a[1]) + d * normal[1],
-                    ];
-                    if (self.inside(q) + d).abs() <= 0.25 * d.abs() + 1e-9 {
-                        pts.push(q);
-                    }
+                    base += n.div_ceil(2);
                 }
                 pts
             }
         }
     }
+}
+
+/// The edges of a closed polygon in runs between corners (vertices where it turns by more
+/// than [`CORNER_TURN`]), each run in order; a polygon without corners is one run from
+/// edge 0.
+fn runs(v: &[[f64; 2]]) -> Vec<Vec<usize>> {
+    let n = v.len();
+    let turn = |i: usize| {
+        let [p, q] = [edge_normal(v, (i + n - 1) % n), edge_normal(v, i)];
+        (p[0] * q[1] - p[1] * q[0])
+            .atan2(p[0] * q[0] + p[1] * q[1])
+            .abs()
+    };
+    let corner: Vec<bool> = (0..n).map(|i| turn(i) > CORNER_TURN).collect();
+    let first = corner.iter().position(|&c| c).unwrap_or(0);
+    let mut runs: Vec<Vec<usize>> = Vec::new();
+    for k in 0..n {
+        let edge = (first + k) % n;
+        if k == 0 || corner[edge] {
+            runs.push(Vec::new());
+        }
+        runs.last_mut()
+            .expect("a run was started at k = 0")
+            .push(edge);
+    }
+    runs
 }
 
 /// Length of edge `i` of a closed polygon (m).
@@ -398,8 +447,11 @@ impl Face {
                 rings.push((inner.ring(middle, p, inset), inner.length(middle)));
             }
             for (ring, length) in rings {
-                let area = width * length / ring.len() as f64;
-                bed.extend(ring.into_iter().map(|at| Sphere { at, area }));
+                let weight: f64 = ring.iter().map(|&(_, w)| w).sum();
+                bed.extend(ring.into_iter().map(|(at, w)| Sphere {
+                    at,
+                    area: width * length * w / weight,
+                }));
             }
         }
         let row = p * 3f64.sqrt() / 2.0;
@@ -1406,6 +1458,73 @@ pub fn check_scenes(tasks: &[Task]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_strip_along_a_flat_is_pressed_through_its_own_centroid() {
+        // A square 8 mm across as a loop from a mesh: one flat cut into unequal collinear
+        // edges and the loop starting halfway along another; a regular hexagon both ways.
+        let h = 0.004;
+        let square = vec![
+            [0.0, -h],
+            [h, -h],
+            [h, h],
+            [0.0015, h],
+            [-0.0031, h],
+            [-h, h],
+            [-h, -h],
+        ];
+        let hexagon = polygon(0.005 / (PI / 6.0).cos(), 6, 0.0);
+        let faces = [
+            (Outline::Loop(square.clone()), square),
+            (Outline::Loop(hexagon.clone()), hexagon.clone()),
+            (Outline::Polygon(hexagon.clone()), hexagon),
+        ];
+        for (outline, corners) in faces {
+            let face = Face {
+                outer: outline,
+                chamfer: 0.0,
+                inner: None,
+                reach: 0.01,
+                pitch: 0.0005,
+            };
+            let bed = face.bed();
+            for i in 0..corners.len() {
+                let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+                let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+                if len < 0.005 {
+                    continue; // a piece of the cut flat
+                }
+                let (u, n) = (
+                    [(b[0] - a[0]) / len, (b[1] - a[1]) / len],
+                    edge_normal(&corners, i),
+                );
+                let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+                // Strips narrower than the rings' bands: by the face's symmetry about the
+                // flat's middle, their centroid lies on it.
+                for w in [0.00002, 0.00005, 0.0001, 0.00015, 0.0002, 0.00024] {
+                    let (mut load, mut along) = (0.0, 0.0);
+                    for s in &bed {
+                        let d = [s.at[0] - mid[0], s.at[1] - mid[1]];
+                        if -(d[0] * n[0] + d[1] * n[1]) < w {
+                            load += s.area;
+                            along += s.area * (d[0] * u[0] + d[1] * u[1]);
+                        }
+                    }
+                    assert!(
+                        load > 0.0,
+                        "{:?}: no sphere within {w} m of a flat",
+                        face.outer
+                    );
+                    assert!(
+                        (along / load).abs() < 1e-6,
+                        "a strip {:.0} µm wide along flat {i} is pressed {:.1} µm off its middle",
+                        w * 1e6,
+                        along / load * 1e6
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn every_solid_face_covers_its_flat_from_just_inside_it_in_convex_prisms() {
