@@ -7,7 +7,7 @@ use std::f64::consts::TAU;
 use ftmap::Task;
 use ftmap::exact::Pair;
 use ftmap::task::cad::{self, Geometry, Role};
-use ftmap::task::fit::{Fit, MeshFit, largest, rotational_play};
+use ftmap::task::fit::{DIRECTIONS, Fit, MeshFit, largest, rotational_play};
 use nalgebra::Vector3;
 
 /// The peg_in_hole task with 0.3 mm chamfers on the peg's tip and 0.5 mm on the hole's
@@ -56,6 +56,17 @@ fn the_meshes_alone_give_the_fit_of_the_dimensions() {
         let measured = MeshFit::measure(&task, &pair).expect("fit");
         let (c, want) = (measured.clearance(), Fit::clearance(geometry));
         assert!((c - want).abs() < 0.5e-6, "{name}: clearance {c} vs {want}");
+        // Flats across the fit (the octagon's 8 %) or none (a round fit's facets), at the
+        // directions measured.
+        let widest = (0..DIRECTIONS)
+            .map(|k| Fit::insertion_limit(geometry, TAU * k as f64 / DIRECTIONS as f64))
+            .fold(0.0, f64::max);
+        assert!(
+            (measured.anisotropy() - widest / want).abs() < 0.005,
+            "{name}: the limit varies {:.4}x, the dimensions say {:.4}x",
+            measured.anisotropy(),
+            widest / want
+        );
         // Halfway between the measured directions, where the octagon's limit bends most.
         for k in 0..16 {
             let theta = TAU * (k as f64 + 0.37) / 16.0;

@@ -154,6 +154,12 @@ impl MeshFit {
         }
         Ok(Self { limits, chamfers })
     }
+
+    /// The largest insertion limit over the smallest: 1 for a round fit, more where flats
+    /// face each other across it (a square's sqrt 2, a hexagon's 1.155, an octagon's 1.082).
+    pub fn anisotropy(&self) -> f64 {
+        self.limits.iter().copied().fold(0.0, f64::max) / self.clearance()
+    }
 }
 
 /// The largest turn (rad) within which a fit's rotational play is looked for: a part that
