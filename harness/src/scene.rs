@@ -315,7 +315,10 @@ impl Outline {
                 let mut pts = Vec::new();
                 for run in runs(v) {
                     let total: f64 = run.iter().map(|&e| length(e)).sum();
-                    let n = (total / pitch).ceil().max(1.0) as usize;
+                    if total == 0.0 {
+                        continue;
+                    }
+                    let n = (total / pitch).ceil() as usize;
                     let (mut at, mut start) = (0, 0.0);
                     for k in 0..n {
                         let s = total * (k as f64 + 0.5) / n as f64;
@@ -325,6 +328,7 @@ impl Outline {
                         }
                         let edge = run[at];
                         let (a, b) = (moved[edge], moved[(edge + 1) % v.len()]);
+                        // Within the edge, should rounding carry `s` onto a turned-around one.
                         let t = ((s - start) / length(edge)).clamp(0.0, 1.0);
                         let normal = edge_normal(v, edge);
                         let d = offset_of(k.min(n - 1 - k));
@@ -332,7 +336,7 @@ impl Outline {
                             a[0] + t * (b[0] - a[0]) + (d - offset) * normal[0],
                             a[1] + t * (b[1] - a[1]) + (d - offset) * normal[1],
                         ];
-                        if total > 0.0 && (self.inside(q) + d).abs() <= 0.25 * d.abs() + 1e-9 {
+                        if (self.inside(q) + d).abs() <= 0.25 * d.abs() + 1e-9 {
                             pts.push((q, total / n as f64));
                         }
                     }
@@ -1502,6 +1506,41 @@ pub fn check_scenes(tasks: &[Task]) -> Result<()> {
 mod tests {
     use super::*;
 
+    /// A flat face of `outer`, no chamfer or bore, on the scenes' 0.5 mm lattice.
+    fn plain_face(outer: Outline) -> Face {
+        Face {
+            outer,
+            chamfer: 0.0,
+            inner: None,
+            reach: 0.01,
+            pitch: 0.0005,
+        }
+    }
+
+    /// The strip of `bed` within `w` of flat `i` of `corners`: its load (m^2), the load's
+    /// mean depth from the flat and its mean offset along it from the flat's middle (m),
+    /// and the flat's length (m).
+    fn strip(bed: &[Sphere], corners: &[[f64; 2]], i: usize, w: f64) -> (f64, f64, f64, f64) {
+        let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let (u, n) = (
+            [(b[0] - a[0]) / len, (b[1] - a[1]) / len],
+            edge_normal(corners, i),
+        );
+        let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+        let (mut load, mut deep, mut along) = (0.0, 0.0, 0.0);
+        for s in bed {
+            let d = [s.at[0] - mid[0], s.at[1] - mid[1]];
+            let t = -(d[0] * n[0] + d[1] * n[1]);
+            if t < w {
+                load += s.area;
+                deep += s.area * t;
+                along += s.area * (d[0] * u[0] + d[1] * u[1]);
+            }
+        }
+        (load, deep / load, along / load, len)
+    }
+
     #[test]
     fn a_strip_along_a_flat_is_pressed_through_its_own_centroid() {
         // A square 8 mm across as a loop from a mesh: one flat cut into unequal collinear
@@ -1523,35 +1562,15 @@ mod tests {
             (Outline::Polygon(hexagon.clone()), hexagon),
         ];
         for (outline, corners) in faces {
-            let face = Face {
-                outer: outline,
-                chamfer: 0.0,
-                inner: None,
-                reach: 0.01,
-                pitch: 0.0005,
-            };
+            let face = plain_face(outline);
             let bed = face.bed();
             for i in 0..corners.len() {
-                let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
-                let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-                if len < 0.005 {
-                    continue; // a piece of the cut flat
-                }
-                let (u, n) = (
-                    [(b[0] - a[0]) / len, (b[1] - a[1]) / len],
-                    edge_normal(&corners, i),
-                );
-                let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
                 // Strips narrower than the rings' bands: by the face's symmetry about the
                 // flat's middle, their centroid lies on it.
                 for w in [0.00002, 0.00005, 0.0001, 0.00015, 0.0002, 0.00024] {
-                    let (mut load, mut along) = (0.0, 0.0);
-                    for s in &bed {
-                        let d = [s.at[0] - mid[0], s.at[1] - mid[1]];
-                        if -(d[0] * n[0] + d[1] * n[1]) < w {
-                            load += s.area;
-                            along += s.area * (d[0] * u[0] + d[1] * u[1]);
-                        }
+                    let (load, _, along, len) = strip(&bed, &corners, i, w);
+                    if len < 0.005 {
+                        break; // a piece of the cut flat
                     }
                     assert!(
                         load > 0.0,
@@ -1559,10 +1578,10 @@ mod tests {
                         face.outer
                     );
                     assert!(
-                        (along / load).abs() < 1e-6,
+                        along.abs() < 1e-6,
                         "a strip {:.0} µm wide along flat {i} is pressed {:.1} µm off its middle",
                         w * 1e6,
-                        along / load * 1e6
+                        along * 1e6
                     );
                 }
             }
@@ -1585,42 +1604,20 @@ mod tests {
             Outline::Polygon(polygon(r, 6, 0.0)),
             Outline::Polygon(polygon(r, 6, PI / 6.0)),
         ];
-        // The area a deep ring's sphere stands for: at most a lattice row by the pitch.
-        let sphere = 0.0005 * 0.0005 * 3f64.sqrt() / 2.0;
         for outline in faces {
             let corners = outline.corners(0.0);
-            let face = Face {
-                outer: outline,
-                chamfer: 0.0,
-                inner: None,
-                reach: 0.01,
-                pitch: 0.0005,
-            };
+            let face = plain_face(outline);
+            // The area a deep ring's sphere stands for: at most a lattice row by the pitch.
+            let sphere = face.cell_area();
             let bed = face.bed();
             let sides = corners.len();
             // Inwards from a flat, the strip widens by 2 t cot of the interior angle.
             let widen = -2.0 / (PI - TAU / sides as f64).tan();
             let mut depth_errors = Vec::new();
             for i in 0..sides {
-                let (a, b) = (corners[i], corners[(i + 1) % sides]);
-                let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-                let (u, n) = (
-                    [(b[0] - a[0]) / len, (b[1] - a[1]) / len],
-                    edge_normal(&corners, i),
-                );
-                let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
                 for k in 0..=174 {
                     let w = 0.00026 + k as f64 * 0.00001;
-                    let (mut load, mut deep, mut along) = (0.0, 0.0, 0.0);
-                    for s in &bed {
-                        let d = [s.at[0] - mid[0], s.at[1] - mid[1]];
-                        let t = -(d[0] * n[0] + d[1] * n[1]);
-                        if t < w {
-                            load += s.area;
-                            deep += s.area * t;
-                            along += s.area * (d[0] * u[0] + d[1] * u[1]);
-                        }
-                    }
+                    let (load, deep, along, len) = strip(&bed, &corners, i, w);
                     let area = len * w + 0.5 * widen * w * w;
                     let depth = (0.5 * len * w * w + widen * w * w * w / 3.0) / area;
                     // Spheres come in pairs mirrored about the flat's middle, and the flats
@@ -1634,12 +1631,12 @@ mod tests {
                         (load - area) / sphere
                     );
                     assert!(
-                        (along / load).abs() < 1e-6,
+                        along.abs() < 1e-6,
                         "a strip {:.0} µm deep along flat {i} is pressed {:.1} µm off its middle",
                         w * 1e6,
-                        along / load * 1e6
+                        along * 1e6
                     );
-                    depth_errors.push(deep / load - depth);
+                    depth_errors.push(deep - depth);
                 }
             }
             let rms = (depth_errors.iter().map(|e| e * e).sum::<f64>() / depth_errors.len() as f64)
