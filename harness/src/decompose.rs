@@ -13,7 +13,7 @@
 //! approach (the bed of small spheres of [`crate::scene`] covers it); its other faces that
 //! look along the approach (chamfers, steps) become convex wedges.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
 use nalgebra::{Isometry3, Point2, Point3};
 use parry3d_f64::bounding_volume::BoundingVolume;
@@ -214,7 +214,8 @@ fn contact_face(a: &Mesh, reach: f64) -> std::result::Result<(Face, Vec<Hull>), 
 }
 
 /// The closed boundary loops of the triangles `faces` in the xy plane, each
-/// counter-clockwise.
+/// counter-clockwise, each from its lowest vertex index: the same mesh gives the same
+/// loops, point for point, and with them the same bed.
 fn boundary_loops(vertices: &[Point3<f64>], faces: &[[u32; 3]]) -> Vec<Vec<[f64; 2]>> {
     let mut count: HashMap<(u32, u32), usize> = HashMap::new();
     for f in faces {
@@ -223,7 +224,7 @@ fn boundary_loops(vertices: &[Point3<f64>], faces: &[[u32; 3]]) -> Vec<Vec<[f64;
             *count.entry((p.min(q), p.max(q))).or_default() += 1;
         }
     }
-    let mut next: HashMap<u32, u32> = HashMap::new();
+    let mut next: BTreeMap<u32, u32> = BTreeMap::new();
     for f in faces {
         for k in 0..3 {
             let (p, q) = (f[k], f[(k + 1) % 3]);
@@ -233,7 +234,7 @@ fn boundary_loops(vertices: &[Point3<f64>], faces: &[[u32; 3]]) -> Vec<Vec<[f64;
         }
     }
     let mut loops = Vec::new();
-    while let Some(&start) = next.keys().next() {
+    while let Some((&start, _)) = next.first_key_value() {
         let mut ring = vec![start];
         let mut at = next.remove(&start);
         while let Some(v) = at.filter(|&v| v != start) {
@@ -435,4 +436,31 @@ fn deviation(b: &Mesh, pieces: &[Piece], region: f64) -> f64 {
         }
     }
     worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_face_gives_the_same_loops_every_time() {
+        // A 24-gon fan about its centre (vertex 0): one boundary loop of 24 points. A loop
+        // started at whichever vertex a hash map gave first came out rotated from call to
+        // call (a new map, a new hasher seed), and with it the order of the bed's spheres.
+        let n = 24;
+        let vertices: Vec<Point3<f64>> = std::iter::once(Point3::origin())
+            .chain((0..n).map(|k| {
+                let t = std::f64::consts::TAU * f64::from(k) / f64::from(n);
+                Point3::new(t.cos(), t.sin(), 0.0)
+            }))
+            .collect();
+        let faces: Vec<[u32; 3]> = (0..n).map(|k| [0, 1 + k, 1 + (k + 1) % n]).collect();
+        let first = boundary_loops(&vertices, &faces);
+        assert_eq!(first.len(), 1);
+        assert_eq!(first[0].len(), n as usize);
+        assert!(area(&first[0]) > 0.0, "counter-clockwise");
+        for _ in 0..16 {
+            assert_eq!(boundary_loops(&vertices, &faces), first);
+        }
+    }
 }
