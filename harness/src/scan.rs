@@ -1,12 +1,14 @@
 //! Measured FT-Maps (the paper's scanned maps): one contact motion in MuJoCo per cell of
-//! Omega, written in the same file format as computed maps (model `Measured`).
+//! Omega, written in the same file format as computed maps (model `Measured`). A task whose
+//! Omega turns part B about the approach (`object.rz`) is scanned over its yaw too, the TCP
+//! unturned, as the FMU reads a press at a relative yaw.
 
 use std::fmt;
 use std::path::PathBuf;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use ftmap::{FtMap, Grid, GridAxis, MapMeta, NCH, SourceMesh, Task, WrenchModel};
+use ftmap::{Axis, FtMap, Grid, GridAxis, MapMeta, NCH, SourceMesh, Task, WrenchModel};
 
 use crate::error::{HarnessError, Result, create_parent};
 use crate::sensor::map_wrench;
@@ -24,6 +26,19 @@ pub struct ScanOptions {
     pub step: f64,
     /// Half width of the scanned square (m); default: Omega's size_trans.
     pub half_width: Option<f64>,
+    /// Yaw step (rad) where Omega holds `object.rz`; default: Omega's delta_rot.
+    pub yaw_step: Option<f64>,
+    /// Half width of the scanned yaws (rad); default: Omega's size_rot.
+    pub yaw_size: Option<f64>,
+}
+
+/// The scanned yaws of part B (rad).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Yaw {
+    /// Grid step (rad).
+    pub step: f64,
+    /// Half width (rad).
+    pub size: f64,
 }
 
 /// A measured map written to a file.
@@ -56,7 +71,11 @@ impl fmt::Display for Scanned {
 pub fn scan_to_file(options: &ScanOptions) -> Result<Scanned> {
     let (task, mut sim) = open_task(&options.task)?;
     let size = options.half_width.unwrap_or(task.omega.size_trans);
-    let map = scan(&mut sim, &task, options.step, size)?;
+    let yaw = Yaw {
+        step: options.yaw_step.unwrap_or(task.omega.delta_rot),
+        size: options.yaw_size.unwrap_or(task.omega.size_rot),
+    };
+    let map = scan(&mut sim, &task, options.step, size, yaw)?;
     create_parent(&options.out)?;
     ftmap::map::format::save(&map, &options.out)?;
     Ok(Scanned {
@@ -66,19 +85,21 @@ pub fn scan_to_file(options: &ScanOptions) -> Result<Scanned> {
     })
 }
 
-/// Scans Omega's object translation at `step` over ±`size` (m): for each cell the object is
-/// placed at the cell's offset and one contact motion is made at the nominal goal.
+/// Scans Omega's object translation at `step` over ±`size` (m), and where Omega holds
+/// `object.rz`, part B's yaw at `yaw`: for each cell part B is placed at the cell's offset
+/// and yaw, and one contact motion is made at the nominal goal with the TCP unturned.
 ///
 /// # Errors
-/// When the task's Omega has other DOFs than object.x and object.y, or the grid is invalid.
-pub fn scan(sim: &mut Sim, task: &Task, step: f64, size: f64) -> Result<FtMap> {
+/// When the task's Omega has other DOFs than object.x, object.y and object.rz, or the grid
+/// is invalid.
+pub fn scan(sim: &mut Sim, task: &Task, step: f64, size: f64, yaw: Yaw) -> Result<FtMap> {
     let dofs = task.dofs()?;
     let names: Vec<String> = dofs.iter().map(|d| d.to_string()).collect();
-    if names != ["object.x", "object.y"] {
+    if names != ["object.x", "object.y"] && names != ["object.x", "object.y", "object.rz"] {
         return Err(HarnessError::Invalid {
             what: "scan",
             reason: format!(
-                "scans object.x, object.y only; task {} has {}",
+                "scans object.x, object.y and object.rz only; task {} has {}",
                 task.name,
                 names.join(", ")
             ),
@@ -86,7 +107,10 @@ pub fn scan(sim: &mut Sim, task: &Task, step: f64, size: f64) -> Result<FtMap> {
     }
     let axes = dofs
         .iter()
-        .map(|d| GridAxis::symmetric(*d, size, step))
+        .map(|d| match d.axis {
+            Axis::Rz => GridAxis::symmetric(*d, yaw.size, yaw.step),
+            _ => GridAxis::symmetric(*d, size, step),
+        })
         .collect::<ftmap::Result<Vec<_>>>()?;
     let grid = Grid::new(axes)?;
     let mut map = FtMap::zeros(grid.clone(), meta(task)?);
@@ -96,9 +120,11 @@ pub fn scan(sim: &mut Sim, task: &Task, step: f64, size: f64) -> Result<FtMap> {
             .unwrap_or_else(|_| ProgressStyle::default_bar())
             .progress_chars("=> "),
     );
+    sim.set_tcp_rotation([0.0; 3])?;
     for cell in 0..grid.cells() {
         let c = grid.coords(cell);
         sim.set_object([c[0], c[1]]);
+        sim.set_object_rotation([0.0, 0.0, c.get(2).copied().unwrap_or(0.0)])?;
         let contact = sim.contact_motion([0.0, 0.0]);
         let w = map_wrench(contact.raw);
         let out = map.cell_mut(cell);

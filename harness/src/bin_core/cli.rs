@@ -109,6 +109,14 @@ pub enum Command {
         /// Half width of the scanned square (mm); default: Omega's size_trans.
         #[arg(long, value_parser = positive)]
         size: Option<f64>,
+        /// Yaw step of part B (degrees) where Omega holds object.rz; default: Omega's
+        /// delta_rot.
+        #[arg(long, value_parser = positive)]
+        yaw_step: Option<f64>,
+        /// Half width of the scanned yaws (degrees; 0: part B unturned); default: Omega's
+        /// size_rot.
+        #[arg(long, value_parser = non_negative)]
+        yaw_size: Option<f64>,
     },
     /// Where each scene accepts part A (a centred contact motion, part B moved off by
     /// bisection) against the geometry's insertion limit.

@@ -92,12 +92,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             out,
             step,
             size,
+            yaw_step,
+            yaw_size,
         } => {
             let scanned = scan_to_file(&ScanOptions {
                 task,
                 out,
                 step: mm(step),
                 half_width: size.map(mm),
+                yaw_step: yaw_step.map(f64::to_radians),
+                yaw_size: yaw_size.map(f64::to_radians),
             })?;
             println!("{scanned}");
         }
