@@ -209,6 +209,7 @@ fn contact_face(a: &Mesh, reach: f64) -> std::result::Result<(Face, Vec<Hull>), 
         chamfer: 0.0,
         inner: loops.pop().map(Outline::Loop),
         pitch: PITCH.max((face_area / BED_CELLS / (3f64.sqrt() / 2.0)).sqrt()),
+        turned: false,
     };
     Ok((face, wedges))
 }
