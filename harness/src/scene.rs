@@ -977,6 +977,7 @@ impl SceneSpec {
                 .map(|m| m.file.to_owned())
                 .unwrap_or_default()
         };
+        let turned = wrist(task)[2];
         let reach_of = |b_radius: f64| b_radius + task.omega.size_trans * 2f64.sqrt() + 0.001;
         let camera = task.camera.as_ref().map(|setup| CameraSpec {
             name: "vision".into(),
@@ -1001,7 +1002,7 @@ impl SceneSpec {
                     inner: None,
                     reach: peg_radius,
                     pitch: 0.0005,
-                    turned: false,
+                    turned,
                 };
                 (
                     face,
@@ -1027,7 +1028,7 @@ impl SceneSpec {
                     inner: None,
                     reach: peg_across_flats,
                     pitch: 0.0005,
-                    turned: false,
+                    turned,
                 };
                 (
                     face,
@@ -1050,7 +1051,7 @@ impl SceneSpec {
                     inner: Some(Outline::Circle(bore_radius)),
                     reach: reach_of(shaft_radius).min(root_radius),
                     pitch: 0.0006,
-                    turned: false,
+                    turned,
                 };
                 let pieces = vec![
                     Piece::Cylinder {
@@ -1081,7 +1082,7 @@ impl SceneSpec {
                     inner: Some(Outline::Circle(bore_radius)),
                     reach: reach_of(seat_radius).min(hx.min(hy) - SPHERE_RADIUS),
                     pitch: 0.0008,
-                    turned: false,
+                    turned,
                 };
                 let pieces = vec![
                     Piece::Cylinder {
@@ -1096,10 +1097,6 @@ impl SceneSpec {
                 ];
                 (face, pieces, seat_height)
             }
-        };
-        let face = Face {
-            turned: wrist(task)[2],
-            ..face
         };
         Ok(Self {
             task: task.name.clone(),
