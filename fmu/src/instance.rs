@@ -16,8 +16,9 @@ use crate::trace::Trace;
 pub const STATE_MAGIC: [u8; 8] = *b"FTFSTATE";
 /// Version of the saved-state layout (2: the `vision.valid` edge; 3: the filter's evidence
 /// that its particles are lost; 4: the `centre_map` parameter; 5: `mismatch_position`; 6:
-/// `mismatch_interpolation`; 7: `mismatch_reach` and the filter's contact poses).
-pub const STATE_VERSION: u32 = 7;
+/// `mismatch_interpolation`; 7: `mismatch_reach` and the filter's contact poses; 8:
+/// `mismatch_lever`).
+pub const STATE_VERSION: u32 = 8;
 
 /// FMI 2.0 status of a call.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]

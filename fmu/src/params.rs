@@ -225,6 +225,7 @@ impl Params {
             mismatch_angle: checked(store, "mismatch_angle")?,
             mismatch_position: checked(store, "mismatch_position")?,
             mismatch_interpolation: checked(store, "mismatch_interpolation")?,
+            mismatch_lever: checked(store, "mismatch_lever")?,
             mismatch_reach: checked(store, "mismatch_reach")?,
             tilt_floor: checked(store, "tilt_floor")?,
             lost: checked(store, "lost")?,

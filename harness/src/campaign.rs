@@ -135,6 +135,10 @@ pub struct CampaignOptions {
     /// FMU parameter `mismatch_interpolation` (share of the lookup's interpolation error).
     #[serde(default)]
     pub mismatch_interpolation: Option<f64>,
+    /// FMU parameter `mismatch_lever` (m: how far the contact's pressure centre may lie from
+    /// the map's).
+    #[serde(default)]
+    pub mismatch_lever: Option<f64>,
     /// FMU parameter `mismatch_reach` (grid steps; 0: every contact's mismatch afresh).
     #[serde(default)]
     pub mismatch_reach: Option<f64>,
@@ -946,6 +950,7 @@ fn trial_config(
             mismatch_angle: options.mismatch_angle,
             mismatch_position: options.mismatch_position,
             mismatch_interpolation: options.mismatch_interpolation,
+            mismatch_lever: options.mismatch_lever,
             mismatch_reach: options.mismatch_reach,
             tilt_floor: options.tilt_floor,
             lost: options.lost,

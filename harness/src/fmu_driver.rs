@@ -50,6 +50,8 @@ pub struct Settings {
     pub mismatch_position: Option<f64>,
     /// `mismatch_interpolation` (share of the lookup's interpolation error).
     pub mismatch_interpolation: Option<f64>,
+    /// `mismatch_lever` (m: the pressure centre's miss).
+    pub mismatch_lever: Option<f64>,
     /// `mismatch_reach` (grid steps; 0: every contact's mismatch afresh).
     pub mismatch_reach: Option<f64>,
     /// `tilt_floor` (rad; negative: off).
@@ -124,6 +126,7 @@ struct Refs {
     mismatch_angle: u32,
     mismatch_position: u32,
     mismatch_interpolation: u32,
+    mismatch_lever: u32,
     mismatch_reach: u32,
     tilt_floor: u32,
     lost: u32,
@@ -226,6 +229,7 @@ impl Fmu {
             mismatch_angle: vr("mismatch_angle")?,
             mismatch_position: vr("mismatch_position")?,
             mismatch_interpolation: vr("mismatch_interpolation")?,
+            mismatch_lever: vr("mismatch_lever")?,
             mismatch_reach: vr("mismatch_reach")?,
             tilt_floor: vr("tilt_floor")?,
             lost: vr("lost")?,
@@ -309,6 +313,7 @@ impl Fmu {
                 settings.mismatch_interpolation,
                 "mismatch_interpolation",
             ),
+            (r.mismatch_lever, settings.mismatch_lever, "mismatch_lever"),
             (r.mismatch_reach, settings.mismatch_reach, "mismatch_reach"),
             (r.tilt_floor, settings.tilt_floor, "tilt_floor"),
             (r.lost, settings.lost, "lost"),

@@ -487,6 +487,19 @@ pub const VARIABLES: &[Variable] = &[
          repeated where the map misses does not say the miss again; 0: every contact's \
          mismatch is drawn afresh",
     ),
+    param(
+        "mismatch_lever",
+        122,
+        Real,
+        Start::Real(0.0),
+        "m",
+        [Some(0.0), Some(0.01)],
+        "How far the contact's pressure centre may lie from where the map has it (standard \
+         deviation across the force): that distance times the measured force's magnitude (up \
+         to the map's largest) is added to the miss of each torque component in quadrature, \
+         near the hole and far from it alike (a miss that does not grow with the torque); 0: \
+         none",
+    ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(
         "vision",

@@ -109,6 +109,11 @@ pub struct Config {
     /// interpolation error the map's second differences imply; nearest cell: the cell's
     /// width, as a position error in the position term.
     pub mismatch_interpolation: f64,
+    /// How far the contact's pressure centre may lie from the map's (m, standard deviation
+    /// across the force): that distance times the measured force's magnitude (up to the
+    /// map's largest) is added to each torque component's miss in quadrature, near the hole
+    /// and far from it alike; 0: none.
+    pub mismatch_lever: f64,
     /// How near (in grid steps of each map axis the TCP moves) a contact must lie to an
     /// earlier one for the map to miss both alike: the mismatch terms then count once over
     /// the contacts there, not once per contact ([`Filter::looks`]); 0: every contact's
@@ -144,6 +149,7 @@ impl Default for Config {
             mismatch_angle: 0.02,
             mismatch_position: 5e-6,
             mismatch_interpolation: 1.0,
+            mismatch_lever: 0.0,
             mismatch_reach: 1.0,
             tilt_floor: 0.0,
             lost: 1e-9,
@@ -448,9 +454,10 @@ impl Filter {
         meas[6] = height as f32;
         let [force, torque] = self.lookup.largest();
         let looks = self.looks(&m.tcp);
+        let lever = c.mismatch_lever * magnitude(&wrench[..3]).min(force);
         let (f, t) = (
-            Mismatch::of(c, c.sigma_force, &wrench[..3], force, looks),
-            Mismatch::of(c, c.sigma_torque, &wrench[3..], torque, looks),
+            Mismatch::of(c, c.sigma_force, &wrench[..3], force, 0.0, looks),
+            Mismatch::of(c, c.sigma_torque, &wrench[3..], torque, lever, looks),
         );
         let vd = if use_depth {
             (1.0 / (c.sigma_depth * c.sigma_depth)) as f32
@@ -792,16 +799,17 @@ struct Mismatch {
 impl Mismatch {
     /// The mismatch of a measured vector `v` whose sensor noise is `sigma`, the vector's
     /// magnitude counted up to the map's `largest` (a wrench beyond anything the map holds
-    /// is not excused by its own size), at the `looks`-th contact at its place
-    /// ([`Filter::looks`]).
-    fn of(c: &Config, sigma: f64, v: &[f64], largest: f64, looks: f64) -> Self {
-        let magnitude = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let counted = magnitude.min(largest);
-        let missed = |share: f64| (share * counted).powi(2);
+    /// is not excused by its own size), with a miss `fixed` on every component beside its
+    /// shares (the torque's from the pressure centre's lever), at the `looks`-th contact at
+    /// its place ([`Filter::looks`]).
+    fn of(c: &Config, sigma: f64, v: &[f64], largest: f64, fixed: f64, looks: f64) -> Self {
+        let size = magnitude(v);
+        let counted = size.min(largest);
+        let missed = |share: f64| (share * counted).powi(2) + fixed * fixed;
         let repeat = repeated(looks, missed(c.mismatch_angle) / (sigma * sigma));
         let inverse = |share: f64| 1.0 / (sigma * sigma + repeat * missed(share));
         let across = inverse(c.mismatch_angle);
-        if magnitude <= sigma {
+        if size <= sigma {
             // No direction to speak of: the smaller of the two weights on every component.
             let w = across.min(inverse(c.mismatch)) as f32;
             return Self {
@@ -813,7 +821,7 @@ impl Mismatch {
         }
         Self {
             across: across as f32,
-            axis: std::array::from_fn(|k| (v[k] / magnitude) as f32),
+            axis: std::array::from_fn(|k| (v[k] / size) as f32),
             along: (inverse(c.mismatch) - across) as f32,
             repeat: repeat as f32,
         }
@@ -830,6 +838,11 @@ impl Mismatch {
 fn repeated(k: f64, ratio: f64) -> f64 {
     let k = k.max(1.0);
     (2.0 * k - 1.0) + k * (k - 1.0) * ratio
+}
+
+/// The Euclidean length of `v`.
+fn magnitude(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 /// What one measurement offers the particles, ready for every iteration.

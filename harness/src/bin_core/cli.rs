@@ -296,6 +296,10 @@ pub struct RunArgs {
     /// error that counts as mismatch; 0: none).
     #[arg(long)]
     pub mismatch_interpolation: Option<f64>,
+    /// FMU parameter `mismatch_lever` (m: how far the contact's pressure centre may lie from
+    /// the map's; times the force's magnitude, a miss on every torque component).
+    #[arg(long)]
+    pub mismatch_lever: Option<f64>,
     /// FMU parameter `mismatch_reach` (grid steps: how near an earlier contact a contact
     /// shares the map's miss with it; 0: every contact's mismatch afresh).
     #[arg(long)]
@@ -434,6 +438,7 @@ impl RunArgs {
             mismatch_angle: self.mismatch_angle,
             mismatch_position: self.mismatch_position,
             mismatch_interpolation: self.mismatch_interpolation,
+            mismatch_lever: self.mismatch_lever,
             mismatch_reach: self.mismatch_reach,
             tilt_floor: self.tilt_floor,
             measure_mismatch: self.measure_mismatch,
