@@ -381,7 +381,7 @@ pub const VARIABLES: &[Variable] = &[
         "mismatch",
         113,
         Real,
-        Start::Real(0.02),
+        Start::Real(0.01),
         "",
         [Some(0.0), Some(1.0)],
         "Share of the measured force's and torque's magnitudes that the map may miss (contact \
@@ -392,7 +392,7 @@ pub const VARIABLES: &[Variable] = &[
         "mismatch_angle",
         114,
         Real,
-        Start::Real(0.02),
+        Start::Real(0.01),
         "rad",
         [Some(0.0), Some(1.0)],
         "Angle by which the map may miss the direction of the measured force and torque: across \
@@ -491,7 +491,7 @@ pub const VARIABLES: &[Variable] = &[
         "mismatch_lever",
         122,
         Real,
-        Start::Real(0.0),
+        Start::Real(5e-5),
         "m",
         [Some(0.0), Some(0.01)],
         "How far the contact's pressure centre may lie from where the map has it (standard \

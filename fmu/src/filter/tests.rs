@@ -397,6 +397,7 @@ fn kept_over_three_contacts(
             f.cfg.mismatch_angle = 0.0;
             f.cfg.mismatch_position = 0.0;
             f.cfg.mismatch_interpolation = 0.0;
+            f.cfg.mismatch_lever = 0.0;
             set(&mut f.cfg);
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed + 100 + k);
             let mut tcp = [0.0, 0.0];
@@ -465,6 +466,7 @@ fn kept_under_a_displaced_contact(position: f64) -> usize {
             f.cfg.mismatch_angle = 0.0;
             f.cfg.mismatch_position = position;
             f.cfg.mismatch_interpolation = 0.0;
+            f.cfg.mismatch_lever = 0.0;
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(k + 160);
             [[0.0, 0.0], [1e-4, -1e-4], [-1e-4, 0.5e-4]]
                 .iter()
