@@ -482,10 +482,10 @@ pub const VARIABLES: &[Variable] = &[
         [Some(0.0), Some(100.0)],
         "How near a contact must lie to earlier ones, in grid steps of each map axis the TCP \
          moves, for the map to miss them alike: the mismatch terms (`mismatch`, \
-         `mismatch_angle`, `mismatch_position`, `mismatch_interpolation`) then count once \
-         over the contacts at that place while the sensor noise counts at each, so a press \
-         repeated where the map misses does not say the miss again; 0: every contact's \
-         mismatch is drawn afresh",
+         `mismatch_angle`, `mismatch_position`, `mismatch_interpolation`, \
+         `mismatch_lever`) then count once over the contacts at that place while the \
+         sensor noise counts at each, so a press repeated where the map misses does not \
+         say the miss again; 0: every contact's mismatch is drawn afresh",
     ),
     param(
         "mismatch_lever",
