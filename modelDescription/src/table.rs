@@ -381,23 +381,25 @@ pub const VARIABLES: &[Variable] = &[
         "mismatch",
         113,
         Real,
-        Start::Real(0.01),
+        Start::Real(-1.0),
         "",
-        [Some(0.0), Some(1.0)],
+        [Some(-1.0), Some(1.0)],
         "Share of the measured force's and torque's magnitudes that the map may miss (contact \
          physics it does not model): along the measured vector, added to sigma_force and \
-         sigma_torque in quadrature",
+         sigma_torque in quadrature; negative: the map's (0.01; 0.02 on a map of the \
+         object's tilts about x or y, whose edge contacts friction decides)",
     ),
     param(
         "mismatch_angle",
         114,
         Real,
-        Start::Real(0.01),
+        Start::Real(-1.0),
         "rad",
-        [Some(0.0), Some(1.0)],
+        [Some(-1.0), Some(1.0)],
         "Angle by which the map may miss the direction of the measured force and torque: across \
          the measured vector, that angle times its magnitude is added to sigma_force and \
-         sigma_torque in quadrature",
+         sigma_torque in quadrature; negative: the map's (0.01; 0.02 on a map of the object's \
+         tilts about x or y)",
     ),
     param(
         "trace",
@@ -491,14 +493,15 @@ pub const VARIABLES: &[Variable] = &[
         "mismatch_lever",
         122,
         Real,
-        Start::Real(5e-5),
+        Start::Real(-1.0),
         "m",
-        [Some(0.0), Some(0.01)],
+        [Some(-1.0), Some(0.01)],
         "How far the contact's pressure centre may lie from where the map has it (standard \
          deviation across the force): that distance times the measured force's magnitude (up \
          to the map's largest) is added to the miss of each torque component in quadrature, \
          near the hole and far from it alike (a miss that does not grow with the torque); 0: \
-         none",
+         none; negative: the map's (5e-5 m; 0 on a map of the object's tilts about x or y, \
+         whose edge point has no face to wander over)",
     ),
     // ---- Vision parameters (reserved: VISION_PARAMETER_VRS, 150..199) -------------------
     param(

@@ -10,6 +10,7 @@
 
 mod estimate;
 mod lookup;
+mod mismatch;
 mod negative;
 mod noise;
 mod resample;
@@ -27,11 +28,15 @@ use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
 pub use estimate::Estimate;
 pub use lookup::{Interpolation, LANES, Lookup, MapAxis, Weights};
+pub use mismatch::MapMismatch;
 pub use negative::NegativeContact;
 pub use state::{Reader, Writer};
 pub use vision::{Prepared, VisionMeasurement, VisionMethod, VisionSense};
 
 use crate::error::{FusionError, Result};
+use mismatch::Mismatch;
+#[cfg(test)]
+use mismatch::repeated;
 
 /// Log-likelihood below which a particle's likelihood counts as underflowed: its linear
 /// weight would be below the smallest normal f32 (with the Gaussian likelihood a residual of
@@ -94,10 +99,11 @@ pub struct Config {
     pub clearance: f64,
     /// Share of the measured force's and torque's magnitudes the map may miss: along the
     /// measured vector, added to `sigma_force` and `sigma_torque` in quadrature (model
-    /// mismatch).
+    /// mismatch); negative: the map's ([`MapMismatch`]).
     pub mismatch: f64,
     /// Angle by which the map may miss the measured force's and torque's directions (rad):
-    /// across the measured vector, that angle times its magnitude is added in quadrature.
+    /// across the measured vector, that angle times its magnitude is added in quadrature;
+    /// negative: the map's ([`MapMismatch`]).
     pub mismatch_angle: f64,
     /// How far the contact may sit from where the map has it (m, standard deviation in each
     /// axis across the approach): the variance of the force's and torque's x and y
@@ -112,7 +118,7 @@ pub struct Config {
     /// How far the contact's pressure centre may lie from the map's (m, standard deviation
     /// across the force): that distance times the measured force's magnitude (up to the
     /// map's largest) is added to each torque component's miss in quadrature, near the hole
-    /// and far from it alike; 0: none.
+    /// and far from it alike; 0: none; negative: the map's ([`MapMismatch`]).
     pub mismatch_lever: f64,
     /// How near (in grid steps of each map axis the TCP moves) a contact must lie to an
     /// earlier one for the map to miss both alike: the mismatch terms then count once over
@@ -145,11 +151,11 @@ impl Default for Config {
             interpolation: Interpolation::Multilinear,
             tail: 4.0,
             clearance: 0.0,
-            mismatch: 0.01,
-            mismatch_angle: 0.01,
+            mismatch: -1.0,
+            mismatch_angle: -1.0,
             mismatch_position: 5e-6,
             mismatch_interpolation: 1.0,
-            mismatch_lever: 5e-5,
+            mismatch_lever: -1.0,
             mismatch_reach: 1.0,
             tilt_floor: 0.0,
             lost: 1e-9,
@@ -234,8 +240,10 @@ impl Filter {
         Ok(Self::with_lookup(Arc::new(Lookup::new(map, path)?), cfg))
     }
 
-    /// A filter over an already prepared map (shared between filters).
+    /// A filter over an already prepared map (shared between filters), with the mismatch
+    /// values `cfg` leaves to the map filled in ([`MapMismatch::of`]).
     pub fn with_lookup(lookup: Arc<Lookup>, cfg: Config) -> Self {
+        let cfg = MapMismatch::of(&lookup).fill(cfg);
         let cfg = Config {
             particles: match cfg.particles {
                 0 => automatic_particles(lookup.ndim()),
@@ -779,65 +787,6 @@ impl Filter {
             noise::jitter(&mut self.rng, values, scale, |u| a.reflect(u));
         }
     }
-}
-
-/// How far the map may miss a measured force or torque vector: inverse variances across
-/// and along its direction.
-struct Mismatch {
-    /// 1 / (sigma^2 + (mismatch_angle |v|)^2): each component, across the measured vector.
-    across: f32,
-    /// The measured vector's direction (zero for a vector too small to have one).
-    axis: [f32; 3],
-    /// 1 / (sigma^2 + (mismatch |v|)^2) - `across`: what the component along `axis` weighs
-    /// more (or less) than one across it.
-    along: f32,
-    /// The factor on the mismatch's variances at this contact ([`repeated`]): 1 at a place
-    /// pressed for the first time.
-    repeat: f32,
-}
-
-impl Mismatch {
-    /// The mismatch of a measured vector `v` whose sensor noise is `sigma`, the vector's
-    /// magnitude counted up to the map's `largest` (a wrench beyond anything the map holds
-    /// is not excused by its own size), with a miss `fixed` on every component beside its
-    /// shares (the torque's from the pressure centre's lever), at the `looks`-th contact at
-    /// its place ([`Filter::looks`]).
-    fn of(c: &Config, sigma: f64, v: &[f64], largest: f64, fixed: f64, looks: f64) -> Self {
-        let size = magnitude(v);
-        let counted = size.min(largest);
-        let missed = |share: f64| (share * counted).powi(2) + fixed * fixed;
-        let repeat = repeated(looks, missed(c.mismatch_angle) / (sigma * sigma));
-        let inverse = |share: f64| 1.0 / (sigma * sigma + repeat * missed(share));
-        let across = inverse(c.mismatch_angle);
-        if size <= sigma {
-            // No direction to speak of: the smaller of the two weights on every component.
-            let w = across.min(inverse(c.mismatch)) as f32;
-            return Self {
-                across: w,
-                axis: [0.0; 3],
-                along: 0.0,
-                repeat: repeat as f32,
-            };
-        }
-        Self {
-            across: across as f32,
-            axis: std::array::from_fn(|k| (v[k] / size) as f32),
-            along: (inverse(c.mismatch) - across) as f32,
-            repeat: repeat as f32,
-        }
-    }
-}
-
-/// The factor on a mismatch variance m at the `k`-th contact at one place (k >= 1, a soft
-/// count; `ratio` = m / e, e the sensor noise's variance). The map misses alike at every
-/// contact there while the noise is drawn afresh, so k contacts with one residual r weigh
-/// r^2 / (m + e / k) together. With variances e + g_j m, g_j = (2 j - 1) + j (j - 1) m / e,
-/// contact j weighs 1 / (e + g_j m) = (e / m) (1 / (e + (j - 1) m) - 1 / (e + j m)), and
-/// these add up to exactly that. 1 at the first contact; about 2 k - 1 where the noise
-/// outweighs the miss; about k^2 m / e where the miss outweighs the noise.
-fn repeated(k: f64, ratio: f64) -> f64 {
-    let k = k.max(1.0);
-    (2.0 * k - 1.0) + k * (k - 1.0) * ratio
 }
 
 /// The Euclidean length of `v`.

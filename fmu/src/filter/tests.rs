@@ -1527,3 +1527,40 @@ fn a_contact_repeated_where_the_map_misses_does_not_say_the_miss_again() {
         "counted at each press {each}, once {once}"
     );
 }
+
+#[test]
+fn mismatch_left_to_the_map_follows_its_kind_and_given_values_stay() {
+    let build = |rot: Option<(f64, f64)>, cfg: Config| {
+        let map = peg_map(1e-3, 2.5e-4, rot).expect("map");
+        let f = Filter::new(
+            &map,
+            Path::new("synthetic"),
+            Config {
+                particles: 100,
+                ..cfg
+            },
+        );
+        f.expect("filter").cfg
+    };
+    let shares = |c: Config| [c.mismatch, c.mismatch_angle, c.mismatch_lever];
+    let of = |m: MapMismatch| [m.share, m.angle, m.lever];
+    let tilts = Some((0.02, 0.01));
+    assert_eq!(
+        shares(build(None, Config::default())),
+        of(MapMismatch::LEVEL)
+    );
+    assert_eq!(
+        shares(build(tilts, Config::default())),
+        of(MapMismatch::TILTED)
+    );
+    assert_ne!(of(MapMismatch::LEVEL), of(MapMismatch::TILTED));
+    // A value the user gives, 0 included, is never the map's.
+    let given = Config {
+        mismatch: 0.03,
+        mismatch_angle: 0.0,
+        mismatch_lever: 1e-4,
+        ..Config::default()
+    };
+    assert_eq!(shares(build(tilts, given)), [0.03, 0.0, 1e-4]);
+    assert_eq!(shares(build(None, given)), [0.03, 0.0, 1e-4]);
+}
