@@ -35,8 +35,6 @@ pub use vision::{Prepared, VisionMeasurement, VisionMethod, VisionSense};
 
 use crate::error::{FusionError, Result};
 use mismatch::Mismatch;
-#[cfg(test)]
-use mismatch::repeated;
 
 /// Log-likelihood below which a particle's likelihood counts as underflowed: its linear
 /// weight would be below the smallest normal f32 (with the Gaussian likelihood a residual of

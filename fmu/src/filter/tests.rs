@@ -7,6 +7,7 @@ use rand_distr::{Distribution, Normal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::SeedableRng;
 
+use super::mismatch::repeated;
 use super::state::{Reader, Writer};
 use super::*;
 use ftfusion_testkit::{HOLE_DEPTH, field, peg_map, peg_map_reaching};
