@@ -33,9 +33,9 @@ impl MapMismatch {
     /// On a map of the object's tilts about x or y: a tilted face rests on an edge point,
     /// and where two points lie equally low (the horns of a crescent) friction picks one,
     /// so the torque flips from press to press at one place (the tilted hole: +-0.2 N.m
-    /// about x), which a frictionless map cannot say. Wider shares,
-    /// no lever term (the edge point has no face to wander over): on the tilted hole they
-    /// kept every trial of three seeds, where the level ones lost one.
+    /// about x), which a frictionless map cannot say. Wider shares, no lever term (the edge
+    /// point has no face to wander over): on the tilted hole they kept every trial of four
+    /// seeds, where the level ones lost one of three.
     pub const TILTED: Self = Self {
         share: 0.02,
         angle: 0.02,
