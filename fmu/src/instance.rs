@@ -152,6 +152,8 @@ struct Io {
     contact: usize,
     slide: usize,
     slide_start: [usize; 3],
+    slide_end_valid: usize,
+    slide_end: [usize; 3],
     /// vision.left_distance, right_distance, passive_left, passive_right.
     vision: [usize; 4],
     vision_valid: usize,
@@ -178,6 +180,8 @@ impl Io {
             contact: index_of(md::CONTACT),
             slide: index_of(md::SLIDE),
             slide_start: md::SLIDE_START.map(index_of),
+            slide_end_valid: index_of(md::SLIDE_END_VALID),
+            slide_end: md::SLIDE_END.map(index_of),
             vision: md::VISION_FEATURES.map(index_of),
             vision_valid: index_of(md::VISION_VALID),
             pose: full(md::GRIP, md::OBJECT),
@@ -578,6 +582,7 @@ impl Instance {
             return Ok(Status::Ok);
         }
         let v = self.io.vision.map(|i| self.store.real(i));
+        let slide = self.store.boolean(self.io.slide);
         let m = Measurement {
             wrench: self.io.wrench.map(|i| self.store.real(i)),
             tcp: self.io.tcp.map(|i| self.store.real(i)),
@@ -586,10 +591,9 @@ impl Instance {
                 passive: [v[2], v[3]],
             }),
             vision_only: image_alone,
-            slide_start: self
-                .store
-                .boolean(self.io.slide)
-                .then(|| self.io.slide_start.map(|i| self.store.real(i))),
+            slide_start: slide.then(|| self.io.slide_start.map(|i| self.store.real(i))),
+            slide_end: (slide && self.store.boolean(self.io.slide_end_valid))
+                .then(|| self.io.slide_end.map(|i| self.store.real(i))),
         };
         let Some(filter) = self.filter.as_mut() else {
             return Err(FusionError::IllegalCall {

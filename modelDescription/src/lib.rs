@@ -3,7 +3,7 @@
 //! The FMU dispatches its get/set calls through [`VARIABLES`]; the packager writes
 //! [`xml()`]; the FMU, its tests and the harness's FMI driver take the names of the
 //! variables that belong together from the groups ([`WRENCH`], [`TCP`], [`CONTACT`],
-//! [`SLIDE`], [`SLIDE_START`], [`VISION_FEATURES`], [`VISION_VALID`], [`OBJECT`], [`GRIP`]
+//! [`SLIDE`], [`SLIDE_START`], [`SLIDE_END_VALID`], [`SLIDE_END`], [`VISION_FEATURES`], [`VISION_VALID`], [`OBJECT`], [`GRIP`]
 //! and their spreads); both read the [`trace`] file format.
 
 mod table;
@@ -12,8 +12,9 @@ mod xml;
 
 pub use table::{
     CONTACT, Causality, GRIP, GRIP_STD, Initial, OBJECT, OBJECT_STD, OBJECT_XY_CORR, SLIDE,
-    SLIDE_START, Start, TCP, VARIABLES, VISION_FEATURES, VISION_INPUT_VRS, VISION_PARAMETER_VRS,
-    VISION_VALID, VarType, Variability, Variable, WRENCH, by_name, by_vr,
+    SLIDE_END, SLIDE_END_VALID, SLIDE_START, Start, TCP, VARIABLES, VISION_FEATURES,
+    VISION_INPUT_VRS, VISION_PARAMETER_VRS, VISION_VALID, VarType, Variability, Variable, WRENCH,
+    by_name, by_vr,
 };
 pub use xml::{guid, xml};
 

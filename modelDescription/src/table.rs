@@ -115,6 +115,10 @@ pub const CONTACT: &str = "contact";
 pub const SLIDE: &str = "slide";
 /// Where a slide under force started (m, task frame relative to the nominal goal).
 pub const SLIDE_START: [&str; 3] = ["slide_start.x", "slide_start.y", "slide_start.rz"];
+/// The input flag saying `SLIDE_END` holds where the slide ended, the contact pressed after it.
+pub const SLIDE_END_VALID: &str = "slide_end.valid";
+/// Where a slide under force ended, when the contact was pressed elsewhere after it (m, rad).
+pub const SLIDE_END: [&str; 3] = ["slide_end.x", "slide_end.y", "slide_end.rz"];
 /// The vision feature inputs (px): the left and right distances from the active part's
 /// edge to the passive part's, then the passive part's left and right columns.
 pub const VISION_FEATURES: [&str; 4] = [
@@ -626,6 +630,32 @@ pub const VARIABLES: &[Variable] = &[
         "rad",
         "Where a twist under force (the TCP turned about z while pressing) started: \
          rz in the frame of tcp.rz",
+    ),
+    flag(
+        SLIDE_END_VALID,
+        217,
+        "With slide: the slide ended at slide_end.x, slide_end.y, slide_end.rz, and the \
+         contact (tcp.*) was pressed after it, lifted off the line's end (at the estimate, \
+         say): the line swept runs from slide_start to slide_end, and the press rules out \
+         part B within the clearance of its own point. False: the slide ended at the contact",
+    ),
+    input(
+        SLIDE_END[0],
+        218,
+        "m",
+        "Where the slide ended: x in the frame of tcp.x (with slide_end.valid)",
+    ),
+    input(
+        SLIDE_END[1],
+        219,
+        "m",
+        "Where the slide ended: y in the frame of tcp.y (with slide_end.valid)",
+    ),
+    input(
+        SLIDE_END[2],
+        220,
+        "rad",
+        "Where a twist under force ended: rz in the frame of tcp.rz (with slide_end.valid)",
     ),
     // ---- Vision feature inputs (reserved: VISION_INPUT_VRS, 250..299) -------------------
     input(

@@ -176,6 +176,10 @@ pub struct Measurement {
     /// frame of `tcp`): the swept line, or for a twist about z the swept yaws, is a
     /// negative contact too.
     pub slide_start: Option<[f64; 3]>,
+    /// The slide ended here (the frame of `tcp`) and the contact was pressed at `tcp`
+    /// afterwards (none: the slide ended at `tcp`): the line swept runs from `slide_start`
+    /// to here, and the press at `tcp` is a negative contact of its own.
+    pub slide_end: Option<[f64; 3]>,
 }
 
 /// What a measurement update did, beyond the new estimate.
@@ -384,6 +388,12 @@ impl Filter {
                     .chain(&model_description::TCP)
                     .chain(&model_description::SLIDE_START),
             )
+            .chain(
+                m.slide_end
+                    .iter()
+                    .flatten()
+                    .zip(&model_description::SLIDE_END),
+            )
             .find(|(v, _)| bad(v))
         {
             Some((&value, &name)) => Err(refuse(name, value)),
@@ -507,12 +517,17 @@ impl Filter {
                         .axis_foot(&[x, y, m.tcp[2], m.tcp[3], m.tcp[4], rz]);
                     [fx, fy, rz]
                 };
-                let end = at(m.tcp[0], m.tcp[1], m.tcp[5]);
-                let start = m.slide_start.map_or(end, |s| at(s[0], s[1], s[2]));
+                let press = at(m.tcp[0], m.tcp[1], m.tcp[5]);
+                let (start, end) = match (m.slide_start, m.slide_end) {
+                    (Some(s), Some(e)) => (at(s[0], s[1], s[2]), at(e[0], e[1], e[2])),
+                    (Some(s), None) => (at(s[0], s[1], s[2]), press),
+                    (None, _) => (press, press),
+                };
                 Fit {
                     term: n.clone(),
                     start,
                     end,
+                    press,
                     went_in,
                 }
             }),
@@ -563,11 +578,18 @@ impl Filter {
                 .log_likelihood(self.cfg.interpolation, rel, heights, &ev.weights, ll);
             match &ev.fit {
                 Some(fit) if fit.went_in => {
-                    fit.term.add_went_in_log_likelihood(pos, rel, fit.end, ll);
+                    fit.term.add_went_in_log_likelihood(pos, rel, fit.press, ll);
                 }
-                Some(fit) => fit
-                    .term
-                    .add_log_likelihood(pos, rel, fit.start, fit.end, ll),
+                Some(fit) if fit.press == fit.end => {
+                    fit.term
+                        .add_log_likelihood(pos, rel, &[[fit.start, fit.end]], ll);
+                }
+                Some(fit) => fit.term.add_log_likelihood(
+                    pos,
+                    rel,
+                    &[[fit.start, fit.end], [fit.press, fit.press]],
+                    ll,
+                ),
                 None => {}
             }
         } else {
@@ -815,7 +837,10 @@ struct Fit {
     start: [f64; 3],
     /// The same at the motion's end.
     end: [f64; 3],
-    /// The part went in: it lies within the clearance of `end`, not outside the swept line.
+    /// The same where the contact was pressed: the end, or a point pressed after a slide.
+    press: [f64; 3],
+    /// The part went in: it lies within the clearance of `press`, not outside the swept
+    /// line.
     went_in: bool,
 }
 

@@ -83,25 +83,30 @@ impl NegativeContact {
 
     /// Adds [`RULED_OUT`] to the log-likelihood of every particle (grid coordinates in
     /// `pos`, axis-major, its map coordinates relative to the TCP in `rel`) whose object
-    /// offset lies within the clearance of the motion that ended at `to` (the TCP's x, y in
-    /// m and rz in rad), less what its rotation errors use of the play. The motion started
-    /// at `from`: where only x, y differ, a slide, whose swept line counts; where only rz
-    /// differs, a twist about z, whose swept yaws count; where both differ, only its end.
-    /// Differences below [`UNMOVED`] of the clearance (x, y) or of the yaw's grid step (rz,
-    /// and any rz on a map without yaw) count as none: a robot's own jitter.
+    /// offset lies within the clearance of any of `motions`, less what its rotation errors
+    /// use of the play. A motion `[from, to]` (the TCP's x, y in m and rz in rad) started
+    /// at `from` and ended at `to`: where only x, y differ, a slide, whose swept line
+    /// counts; where only rz differs, a twist about z, whose swept yaws count; where both
+    /// differ, only its end. Differences below [`UNMOVED`] of the clearance (x, y) or of
+    /// the yaw's grid step (rz, and any rz on a map without yaw) count as none: a robot's
+    /// own jitter.
     pub fn add_log_likelihood(
         &self,
         pos: &[f32],
         rel: &[f32],
-        from: [f64; 3],
-        to: [f64; 3],
+        motions: &[[[f64; 3]; 2]],
         ll: &mut [f32],
     ) {
-        self.visit(pos, rel, from, to, ll.len(), |i, inside| {
-            if inside {
-                ll[i] += RULED_OUT;
+        let swept: Vec<Swept> = motions
+            .iter()
+            .map(|&[from, to]| self.swept(from, to))
+            .collect();
+        let n = ll.len();
+        for (i, l) in ll.iter_mut().enumerate() {
+            if swept.iter().any(|s| self.within(s, pos, rel, n, i)) {
+                *l += RULED_OUT;
             }
-        });
+        }
     }
 
     /// Adds [`RULED_OUT`] to the log-likelihood of every particle that a contact motion
@@ -115,25 +120,18 @@ impl NegativeContact {
         at: [f64; 3],
         ll: &mut [f32],
     ) {
-        self.visit(pos, rel, at, at, ll.len(), |i, inside| {
-            if !inside {
-                ll[i] += RULED_OUT;
+        let s = self.swept(at, at);
+        let n = ll.len();
+        for (i, l) in ll.iter_mut().enumerate() {
+            if !self.within(&s, pos, rel, n, i) {
+                *l += RULED_OUT;
             }
-        });
+        }
     }
 
-    /// Calls `f` with each of the `n` particles' index and whether it lies within the
-    /// clearance of the motion from `from` to `to`, as [`Self::add_log_likelihood`] reads
-    /// the motion.
-    fn visit(
-        &self,
-        pos: &[f32],
-        rel: &[f32],
-        from: [f64; 3],
-        to: [f64; 3],
-        n: usize,
-        mut f: impl FnMut(usize, bool),
-    ) {
+    /// The motion from `from` to `to` as [`Self::add_log_likelihood`] reads it, in the
+    /// particles' terms.
+    fn swept(&self, from: [f64; 3], to: [f64; 3]) -> Swept {
         let slid = (from[0] - to[0]).hypot(from[1] - to[1]) > UNMOVED * self.clearance;
         let twisted = self
             .rotations
@@ -144,55 +142,74 @@ impl NegativeContact {
             (false, true) => [to[0], to[1], from[2]],
             _ => to,
         };
-        let from = match (slid, twisted) {
-            (true, true) => to,
-            _ => from,
-        };
         // In clearances, relative to `to`.
-        let (sx, sy) = (
+        let scale = [
             (self.x.step / self.clearance) as f32,
             (self.y.step / self.clearance) as f32,
-        );
-        let (cx, cy) = (self.x.coord(to[0]), self.y.coord(to[1]));
-        let (ax, ay) = (
-            (self.x.coord(from[0]) - cx) * sx,
-            (self.y.coord(from[1]) - cy) * sy,
-        );
-        let len2 = ax * ax + ay * ay;
-        let [i, j] = self.axes;
-        let (us, vs) = (&pos[i * n..(i + 1) * n], &pos[j * n..(j + 1) * n]);
-        for (i, (&u, &v)) in us.iter().zip(vs).enumerate() {
-            // The share of the clearance the rotation errors leave (a yaw error counted
-            // from the nearest yaw the twist passed).
-            let left = 1.0
-                - self
-                    .rotations
-                    .iter()
-                    .map(|(k, a, play)| {
-                        let e = a.difference(rel[k * n + i] - a.coord(0.0));
-                        let swept = if a.dof.axis == Axis::Rz {
-                            ((from[2] - to[2]) / a.step) as f32
-                        } else {
-                            0.0
-                        };
-                        beyond(a, e, swept) / play
-                    })
-                    .sum::<f32>();
-            if left <= 0.0 {
-                f(i, false);
-                continue;
-            }
-            let (dx, dy) = ((u - cx) * sx, (v - cy) * sy);
-            // The nearest point of the segment, as a share of the way from `to` to `from`.
-            let t = if len2 > 0.0 {
-                ((dx * ax + dy * ay) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let (ex, ey) = (dx - t * ax, dy - t * ay);
-            f(i, ex * ex + ey * ey < left * left);
+        ];
+        let end = [self.x.coord(to[0]), self.y.coord(to[1])];
+        let line = [
+            (self.x.coord(from[0]) - end[0]) * scale[0],
+            (self.y.coord(from[1]) - end[1]) * scale[1],
+        ];
+        Swept {
+            scale,
+            end,
+            line,
+            len2: line[0] * line[0] + line[1] * line[1],
+            yaws: from[2] - to[2],
         }
     }
+
+    /// Whether particle `i` of `n` lies within the clearance of motion `s`, less what its
+    /// rotation errors use of the play (a yaw error counted from the nearest yaw the twist
+    /// passed).
+    #[inline(always)]
+    fn within(&self, s: &Swept, pos: &[f32], rel: &[f32], n: usize, i: usize) -> bool {
+        let left = 1.0
+            - self
+                .rotations
+                .iter()
+                .map(|(k, a, play)| {
+                    let e = a.difference(rel[k * n + i] - a.coord(0.0));
+                    let swept = if a.dof.axis == Axis::Rz {
+                        (s.yaws / a.step) as f32
+                    } else {
+                        0.0
+                    };
+                    beyond(a, e, swept) / play
+                })
+                .sum::<f32>();
+        if left <= 0.0 {
+            return false;
+        }
+        let [u, v] = self.axes.map(|k| pos[k * n + i]);
+        let (dx, dy) = ((u - s.end[0]) * s.scale[0], (v - s.end[1]) * s.scale[1]);
+        let [ax, ay] = s.line;
+        // The nearest point of the segment, as a share of the way from the end to the start.
+        let t = if s.len2 > 0.0 {
+            ((dx * ax + dy * ay) / s.len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (ex, ey) = (dx - t * ax, dy - t * ay);
+        ex * ex + ey * ey < left * left
+    }
+}
+
+/// A motion in the particles' terms: where it ended (grid units) and the line back to its
+/// start, in clearances.
+struct Swept {
+    /// Grid units per clearance, along x and y.
+    scale: [f32; 2],
+    /// The end's grid coordinates.
+    end: [f32; 2],
+    /// From the end to the start, in clearances.
+    line: [f32; 2],
+    /// The line's squared length.
+    len2: f32,
+    /// The yaws swept, from the end to the start (rad).
+    yaws: f64,
 }
 
 /// How far the rotation error `e` (grid units) lies outside the interval between 0 and

@@ -7,6 +7,7 @@ use std::path::Path;
 use ftfusion_testkit::CLEARANCE;
 use ftmap::{Axis, Dof, FtMap, Grid, GridAxis, MapMeta, Pose};
 
+use super::negative::RULED_OUT;
 use super::*;
 /// Yaw step of the synthetic map (rad): 2.5 degrees, 18 steps per eighth of a turn.
 const YAW_STEP: f64 = std::f64::consts::PI / 72.0;
@@ -153,9 +154,39 @@ fn the_negative_contact_spares_the_particles_the_yaw_keeps_out() {
     f.lookup.relative(&f.pos, &tcp, &mut rel, &mut Vec::new());
     let mut ll = vec![0.0; 4];
     let nc = f.negative_contact().expect("the term applies").clone();
-    nc.add_log_likelihood(&f.pos, &rel, [0.0; 3], [0.0; 3], &mut ll);
+    nc.add_log_likelihood(&f.pos, &rel, &[[[0.0; 3], [0.0; 3]]], &mut ll);
     let out: Vec<bool> = ll.iter().map(|l| *l < -1.0).collect();
     assert_eq!(out, [true, false, false, true], "{ll:?}");
+}
+
+#[test]
+fn a_slide_and_a_press_off_its_line_rule_out_each_particle_once() {
+    // A slide along y = 2 clearances, then a press at (0, -2) clearances: out, once each,
+    // the particles within the clearance of the line or of the press; spared, one between.
+    let mut f = filter(4);
+    let c = CLEARANCE;
+    for (i, p) in [
+        [3.0 * c, 2.5 * c, 0.0],
+        [0.2 * c, -2.0 * c, 0.0],
+        [0.0, 0.0, 0.0],
+        [-2.0 * c, 2.0 * c, 0.0],
+    ]
+    .iter()
+    .enumerate()
+    {
+        place(&mut f, i, *p);
+    }
+    let tcp = [0.0, -2.0 * c, 0.01, 0.0, 0.0, 0.0];
+    let mut rel = vec![0.0; 12];
+    f.lookup.relative(&f.pos, &tcp, &mut rel, &mut Vec::new());
+    let mut ll = vec![0.0; 4];
+    let nc = f.negative_contact().expect("the term applies").clone();
+    let (line, press) = (
+        [[-4.0 * c, 2.0 * c, 0.0], [4.0 * c, 2.0 * c, 0.0]],
+        [[0.0, -2.0 * c, 0.0]; 2],
+    );
+    nc.add_log_likelihood(&f.pos, &rel, &[line, press], &mut ll);
+    assert_eq!(ll, [RULED_OUT, RULED_OUT, 0.0, RULED_OUT], "{ll:?}");
 }
 
 #[test]
@@ -175,14 +206,19 @@ fn a_twist_rules_out_the_yaws_it_passed_round_the_seam() {
     f.lookup.relative(&f.pos, &tcp, &mut rel, &mut Vec::new());
     let mut ll = vec![0.0; 5];
     let nc = f.negative_contact().expect("the term applies").clone();
-    nc.add_log_likelihood(&f.pos, &rel, [0.0, 0.0, start], [0.0, 0.0, end], &mut ll);
+    nc.add_log_likelihood(
+        &f.pos,
+        &rel,
+        &[[[0.0, 0.0, start], [0.0, 0.0, end]]],
+        &mut ll,
+    );
     let out: Vec<bool> = ll.iter().map(|l| *l < -1.0).collect();
     // -22 (= 23) and 21: passed; 0, 10: not; -18.5 (= 26.5): within the play (2.5
     // degrees) of the end.
     assert_eq!(out, [true, true, false, true, false], "{ll:?}");
     // Without the twist's start only the end's play counts: 23 and 21 are spared.
     let mut ll = vec![0.0; 5];
-    nc.add_log_likelihood(&f.pos, &rel, [0.0, 0.0, end], [0.0, 0.0, end], &mut ll);
+    nc.add_log_likelihood(&f.pos, &rel, &[[[0.0, 0.0, end], [0.0, 0.0, end]]], &mut ll);
     let out: Vec<bool> = ll.iter().map(|l| *l < -1.0).collect();
     assert_eq!(out, [true, false, false, true, false], "{ll:?}");
 }

@@ -1051,26 +1051,31 @@ fn a_contact_that_went_in_keeps_the_disc_within_the_clearance_and_nothing_outsid
     );
 }
 
+/// After the contact at the goal of [`near_the_hole`] (part B 0.07 mm off along +x), a
+/// contact pressed at (0.13, 0.2) mm that followed a slide from `start` to `end` (none: to
+/// the press): the weight within the clearance of (0.13, 0) mm and near the truth.
+fn after_a_slide(start: Option<[f64; 3]>, end: Option<[f64; 3]>) -> (f64, f64) {
+    let x = 1.3e-4;
+    let (mut f, truth) = near_the_hole(0.0);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+    let mut m = measurement(truth[0], truth[1], [x, 2e-4], 1e-4, &mut rng);
+    m.slide_start = start;
+    m.slide_end = end;
+    f.measure(&m).expect("finite");
+    let c = f.negative_contact().expect("a clearance").clearance;
+    (
+        weight_within(&f, [x, 0.0], 0.0, 0.999 * c),
+        weight_within(&f, truth, 0.0, 0.2 * c),
+    )
+}
+
 #[test]
 fn a_slide_that_did_not_go_in_rules_out_the_line_it_swept() {
-    // After the contact at the goal (part B 0.07 mm off along +x), a slide along y from
-    // -0.2 mm to +0.2 mm at x = 0.13 mm that ends in contact: the particles within the
-    // clearance of that line are out, not only those within the clearance of its end; the
-    // truth, 0.06 mm beside the line, keeps its share.
-    let x = 1.3e-4;
-    let slide = |start: Option<[f64; 3]>| {
-        let (mut f, truth) = near_the_hole(0.0);
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
-        let mut m = measurement(truth[0], truth[1], [x, 2e-4], 1e-4, &mut rng);
-        m.slide_start = start;
-        f.measure(&m).expect("finite");
-        let c = f.negative_contact().expect("a clearance").clearance;
-        let on_line = weight_within(&f, [x, 0.0], 0.0, 0.999 * c);
-        let near_truth = weight_within(&f, truth, 0.0, 0.2 * c);
-        (on_line, near_truth)
-    };
-    let (swept_on, swept_truth) = slide(Some([x, -2e-4, 0.0]));
-    let (end_on, end_truth) = slide(None);
+    // A slide along y from -0.2 mm to the press: the particles within the clearance of
+    // that line are out, not only those within the clearance of its end; the truth, 0.06
+    // mm beside the line, keeps its share.
+    let (swept_on, swept_truth) = after_a_slide(Some([1.3e-4, -2e-4, 0.0]), None);
+    let (end_on, end_truth) = after_a_slide(None, None);
     assert!(swept_on < 1e-9, "on the swept line: {swept_on}");
     assert!(
         end_on > 1e-3,
@@ -1080,6 +1085,23 @@ fn a_slide_that_did_not_go_in_rules_out_the_line_it_swept() {
         swept_truth > end_truth && swept_truth > 1e-3,
         "near the truth: {swept_truth} swept, {end_truth} end only"
     );
+}
+
+#[test]
+fn a_slide_pressed_again_elsewhere_rules_out_its_line_to_its_end() {
+    // A slide along y from +0.25 mm to -0.2 mm, its contact pressed again afterwards at
+    // +0.2 mm: told where it ended (`slide_end`), the filter rules out the whole line, 0
+    // included; told only where it started, the line ends at the press and spares 0. The
+    // truth keeps its share.
+    let start = Some([1.3e-4, 2.5e-4, 0.0]);
+    let (told, truth_told) = after_a_slide(start, Some([1.3e-4, -2e-4, 0.0]));
+    let (untold, _) = after_a_slide(start, None);
+    assert!(told < 1e-9, "on the line, told its end: {told}");
+    assert!(
+        untold > 1e-3,
+        "the line ends at the press, untold: {untold}"
+    );
+    assert!(truth_told > 1e-3, "near the truth: {truth_told}");
 }
 
 #[test]
@@ -1277,10 +1299,11 @@ fn inputs_beyond_a_physical_magnitude_are_refused_by_name() {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(24);
     let sound = measurement(1e-3, 1e-3, [0.0, 0.0], 1e-3, &mut rng);
     type Spoil = fn(&mut Measurement);
-    let cases: [(Spoil, &str); 3] = [
+    let cases: [(Spoil, &str); 4] = [
         (|m| m.wrench[0] = 2e19, "wrench.fx"),
         (|m| m.tcp[2] = -3e7, "tcp.z"),
         (|m| m.slide_start = Some([0.0, 1e300, 0.0]), "slide_start.y"),
+        (|m| m.slide_end = Some([0.0, 0.0, 1e300]), "slide_end.rz"),
     ];
     for (spoil, name) in cases {
         let mut m = sound;

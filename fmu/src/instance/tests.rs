@@ -453,6 +453,27 @@ fn a_slide_start_set_with_the_contact_rules_out_the_line_swept() {
 }
 
 #[test]
+fn a_slide_end_set_with_the_contact_reaches_the_filter() {
+    // The slide of the test above pressed again at its midpoint: `slide_end.valid` and
+    // `slide_end.*` change what the filter concludes; without `slide` they are ignored.
+    let truth = [3e-4, 0.0];
+    let run = |slide: bool, end: bool| {
+        let (mut i, _) = initialized();
+        contact(&mut i, 0.0, truth, [0.0, 0.0]);
+        set_bool(&mut i, "slide", slide);
+        set_bool(&mut i, "slide_end.valid", end);
+        set_reals(&mut i, &["slide_start.x", "slide_start.y"], &[2e-4, -3e-4]).expect("inputs");
+        set_reals(&mut i, &["slide_end.x", "slide_end.y"], &[2e-4, 3e-4]).expect("inputs");
+        assert_eq!(contact(&mut i, 1.0, truth, [2e-4, 0.0]), Status::Ok);
+        [real(&i, "object.x"), real(&i, "object.y")]
+    };
+    let (told, untold) = (run(true, true), run(true, false));
+    assert!(told.iter().chain(&untold).all(|v| v.is_finite()));
+    assert_ne!(told, untold, "the line to its end changes the estimate");
+    assert_eq!(run(false, true), run(false, false), "no slide: no line");
+}
+
+#[test]
 fn a_state_saved_after_initialization_restores_into_a_fresh_instance() {
     // FMI 2.0 allows fmi2SetFMUstate right after fmi2Instantiate; the reference importer
     // restores a saved run that way and goes on stepping.
