@@ -113,7 +113,13 @@ pub fn samples(results: &[TrialResult]) -> Vec<Sample> {
         .flat_map(|(trial, r)| {
             r.steps
                 .iter()
-                .filter_map(|s| s.estimate.map(|e| (s.image, e)))
+                .flat_map(|s| {
+                    [
+                        s.started.map(|e| (false, e)),
+                        s.estimate.map(|e| (s.image, e)),
+                    ]
+                })
+                .flatten()
                 .enumerate()
                 .map(move |(k, (image, estimate))| Sample::of(trial, k + 1, image, r, estimate))
         })

@@ -29,7 +29,9 @@ use crate::report::{self, Pace, Summary};
 use crate::scene::scene_path;
 use crate::sensor::Noise;
 use crate::sim::Sim;
-use crate::trial::{Strategy, TrialConfig, TrialResult, Truth, Twist, run_trial, spiral};
+use crate::trial::{
+    Slide, SlidePress, Strategy, TrialConfig, TrialResult, Truth, Twist, run_trial, spiral,
+};
 use crate::vision::Detector;
 use crate::world::{MapWorld, World, WorldKind};
 use model_description::trace;
@@ -106,6 +108,9 @@ pub struct CampaignOptions {
     pub sensor_noise: bool,
     /// Slides under force across the estimate's spread ([`crate::trial::next_motion`]).
     pub slide: bool,
+    /// Where a slide that found no hole presses for its measurement.
+    #[serde(default)]
+    pub slide_press: SlidePress,
     /// Twists under force about z where the yaw is uncertain ([`crate::trial::next_motion`]).
     pub twist: bool,
     /// The FMU (default: [`default_fmu_path`]).
@@ -924,7 +929,10 @@ fn trial_config(
         strategy: options.strategy,
         max_contacts,
         max_sim_time: options.max_sim_time.unwrap_or(f64::INFINITY),
-        slide: options.slide.then(|| fit.clearance()),
+        slide: options.slide.then(|| Slide {
+            clearance: fit.clearance(),
+            press: options.slide_press,
+        }),
         symmetry: task.omega.symmetry,
         twist: if options.twist {
             twist_setup(task, fit, map.as_deref())?

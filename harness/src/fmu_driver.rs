@@ -98,6 +98,17 @@ pub struct Estimate {
     pub clusters: i32,
 }
 
+/// A slide or twist under force that a contact followed: where the TCP's x, y (m) and rz
+/// (rad) stood when it started, and where it ended when part A was pressed elsewhere after
+/// it (none: the contact is where it ended).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Swept {
+    /// Where it started (inputs `slide_start.*`).
+    pub start: [f64; 3],
+    /// Where it ended, the contact pressed elsewhere after it (inputs `slide_end.*`).
+    pub end: Option<[f64; 3]>,
+}
+
 /// Value references of the variables the harness uses.
 #[derive(Debug, Clone)]
 struct Refs {
@@ -106,6 +117,8 @@ struct Refs {
     contact: u32,
     slide: u32,
     slide_start: [u32; 3],
+    slide_end_valid: u32,
+    slide_end: [u32; 3],
     object: [u32; 2],
     std: [u32; 2],
     /// grip.x, grip.y, grip.x_std, grip.y_std.
@@ -200,6 +213,8 @@ impl Fmu {
             contact: vr(md::CONTACT)?,
             slide: vr(md::SLIDE)?,
             slide_start: group(md::SLIDE_START, vr)?,
+            slide_end_valid: vr(md::SLIDE_END_VALID)?,
+            slide_end: group(md::SLIDE_END, vr)?,
             object: [vr(md::OBJECT[0])?, vr(md::OBJECT[1])?],
             std: [vr(md::OBJECT_STD[0])?, vr(md::OBJECT_STD[1])?],
             grip: [
@@ -356,9 +371,9 @@ impl Estimator {
     }
 
     /// Hands one settled contact to the FMU (wrench in the map's convention, TCP position
-    /// and rotation vector relative to the nominal goal; `slide_start`, where a slide or a
-    /// twist under force that ended in it started: x, y, rz), with an image's features
-    /// when there are any, and returns its new estimate.
+    /// and rotation vector relative to the nominal goal; `swept`, the slide or twist under
+    /// force it followed), with an image's features when there are any, and returns its
+    /// new estimate.
     ///
     /// # Errors
     /// When the FMU refuses an input or the step.
@@ -367,18 +382,25 @@ impl Estimator {
         wrench: [f64; 6],
         tcp: [f64; 3],
         rot: [f64; 3],
-        slide_start: Option<[f64; 3]>,
+        swept: Option<Swept>,
         image: Option<&Features>,
     ) -> Result<Estimate> {
         let r = &self.refs;
         self.inst
             .set_real(&r.wrench, &wrench)
             .map_err(fmi_err("set wrench"))?;
+        let end = swept.and_then(|s| s.end);
         self.inst
-            .set_real(&r.slide_start, &slide_start.unwrap_or([0.0; 3]))
+            .set_real(&r.slide_start, &swept.map_or([0.0; 3], |s| s.start))
             .map_err(fmi_err("set slide_start"))?;
         self.inst
-            .set_boolean(&[r.slide], &[i32::from(slide_start.is_some())])
+            .set_real(&r.slide_end, &end.unwrap_or([0.0; 3]))
+            .map_err(fmi_err("set slide_end"))?;
+        self.inst
+            .set_boolean(
+                &[r.slide, r.slide_end_valid],
+                &[i32::from(swept.is_some()), i32::from(end.is_some())],
+            )
             .map_err(fmi_err("set slide"))?;
         self.pulse(
             r.contact,

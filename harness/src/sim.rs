@@ -29,7 +29,7 @@ use crate::error::{HarnessError, Result};
 use crate::scene::{
     APPROACH_CLEARANCE, SceneSpec, WRIST_JOINTS, scene_path, write_scene, write_scene_of,
 };
-use crate::world::{Contact, World, foot, lean};
+use crate::world::{Contact, Slid, World, foot, lean};
 
 /// Longest contact motion (s of simulated time) before it is reported as not settled.
 pub const MAX_TIME: f64 = 2.0;
@@ -221,7 +221,7 @@ impl Sim {
     }
 
     /// A contact motion at `xy`, then a slide or a twist, if any.
-    fn motion(&mut self, xy: [f64; 2], mut sweep: Option<Sweep>) -> Contact {
+    fn motion(&mut self, xy: [f64; 2], mut sweep: Option<Sweep>) -> Slid {
         let d = &mut self.data;
         d.reset();
         // The object offset is where the TCP aligns the parts: part B sits that far off, and
@@ -293,6 +293,7 @@ impl Sim {
         // The reading when the speed settled, and the torque when the calm began.
         let mut first: Option<Reading> = None;
         let mut calm_torque = [0.0; 3];
+        let mut pressed: Option<(Reading, f64)> = None;
         while steps < max_steps {
             d.step();
             steps += 1;
@@ -357,9 +358,9 @@ impl Sim {
             } else if first.is_none() {
                 calm = 0;
             }
-            // Settled by the speed, then (a press that stays out) by the torque over a
-            // window from there.
-            let torque_window = first.is_some() && sweep.is_none();
+            // Settled by the speed, then (a press that stays out, before a sweep too) by the
+            // torque over a window from there.
+            let torque_window = first.is_some();
             if calm
                 >= if torque_window {
                     torque_steps
@@ -367,7 +368,7 @@ impl Sim {
                     settle_steps
                 }
             {
-                if sweep.is_none() && h > entered {
+                if h > entered {
                     let now = read(d);
                     let at_rest = *first.get_or_insert(now);
                     if at_rest.tcp[2] - z > DROP_DEPTH {
@@ -383,6 +384,8 @@ impl Sim {
                 }
                 match sweep.take() {
                     Some(to) if h > entered => {
+                        // The press the sweep starts from, read at rest.
+                        pressed = first.take().map(|r| (r, d.time()));
                         let (speed, len) = match to {
                             Sweep::Line(end) => {
                                 (SLIDE_SPEED, (end[0] - xy[0]).hypot(end[1] - xy[1]))
@@ -397,19 +400,21 @@ impl Sim {
             }
         }
         let settled = calm >= settle_steps || first.is_some();
-        let Reading { raw, tcp, angles } = first.unwrap_or_else(|| read(d));
-        let rot = Rotation3::from_euler_angles(angles[0], angles[1], angles[2])
-            .scaled_axis()
-            .into();
+        let contact = |r: Reading, settled: bool, time: f64| Contact {
+            raw: r.raw,
+            tcp: r.tcp,
+            rot: Rotation3::from_euler_angles(r.angles[0], r.angles[1], r.angles[2])
+                .scaled_axis()
+                .into(),
+            settled,
+            inserted: settled && height(r.tcp) < SUCCESS_HEIGHT,
+            time,
+        };
         let time = d.time();
         self.simulated += time;
-        Contact {
-            raw,
-            tcp,
-            rot,
-            settled,
-            inserted: settled && height(tcp) < SUCCESS_HEIGHT,
-            time,
+        Slid {
+            end: contact(first.unwrap_or_else(|| read(d)), settled, time),
+            start: pressed.map(|(r, t)| contact(r, true, t)),
         }
     }
 }
@@ -475,7 +480,7 @@ impl Sim {
         // Where a motion is commanded: a tilted carriage stands beside it.
         let [ax, ay, az] = self.wrist_angles;
         let at = foot(swept.tcp, &Rotation3::from_euler_angles(ax, ay, az));
-        let pressed = self.motion(at, None);
+        let pressed = self.motion(at, None).end;
         Contact {
             time: swept.time + pressed.time,
             ..pressed
@@ -549,19 +554,28 @@ impl World for Sim {
     }
 
     fn contact_motion(&mut self, xy: [f64; 2]) -> Contact {
-        self.motion(xy, None)
+        self.motion(xy, None).end
     }
 
     /// The slide moves at [`SLIDE_SPEED`] and stops where part A drops by [`DROP_DEPTH`]
     /// (the edge found the hole: the carriage holds there and part A goes in). A slide that
-    /// found no hole ends with a fresh press where it stopped: after sliding, static friction
-    /// holds part A against the stiff servos with up to mu times the imposed force sideways
-    /// (15 N at 50 N and mu 0.3: 0.9 N.m about a sensor 60 mm up), which no map of static
-    /// contacts explains; lifted by the approach clearance and pressed again, it reads the
-    /// static contact there.
-    fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact {
-        let slid = self.motion(from, Some(Sweep::Line(to)));
-        self.pressed_again(slid)
+    /// found no hole ends with a fresh press, where it stopped or at `press`: after sliding,
+    /// static friction holds part A against the stiff servos with up to mu times the
+    /// imposed force sideways (15 N at 50 N and mu 0.3: 0.9 N.m about a sensor 60 mm up),
+    /// which no map of static contacts explains; lifted by the approach clearance and
+    /// pressed again, it reads a static contact.
+    fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2], press: [f64; 2]) -> Slid {
+        let Slid { start, end } = self.motion(from, Some(Sweep::Line(to)));
+        let end = if end.inserted || press == to {
+            self.pressed_again(end)
+        } else {
+            let pressed = self.motion(press, None).end;
+            Contact {
+                time: end.time + pressed.time,
+                ..pressed
+            }
+        };
+        Slid { start, end }
     }
 
     /// The twist turns at [`TWIST_SPEED`] and, like a slide, stops where part A drops by
@@ -570,7 +584,7 @@ impl World for Sim {
         // Either end refused where the scene has no hinge about z; the wrist starts at `from`.
         self.set_tcp_rotation([0.0, 0.0, to])?;
         self.set_tcp_rotation([0.0, 0.0, from])?;
-        let twisted = self.motion(xy, Some(Sweep::Turn(to)));
+        let twisted = self.motion(xy, Some(Sweep::Turn(to))).end;
         self.wrist_angles[2] = twisted.rot[2];
         Ok(self.pressed_again(twisted))
     }

@@ -16,7 +16,7 @@ use rand::rngs::StdRng;
 
 use crate::error::Result;
 use crate::eye::Eye;
-use crate::fmu_driver::{Estimate, Fmu, Settings};
+use crate::fmu_driver::{Estimate, Fmu, Settings, Swept};
 use crate::sensor::{Noise, map_wrench};
 use crate::world::{World, foot, lean};
 
@@ -47,15 +47,36 @@ pub struct TrialConfig {
     pub spiral_radius: f64,
     /// FMU settings (the seed is set per trial).
     pub settings: Settings,
-    /// Slides under force with the fit's radial clearance (m): [`next_motion`]; `None`,
-    /// contact motions only.
-    pub slide: Option<f64>,
+    /// Slides under force: [`next_motion`]; `None`, contact motions only.
+    pub slide: Option<Slide>,
     /// n-fold symmetry of the fit about the approach (z): a yaw error counts modulo
     /// 2 pi / n.
     pub symmetry: Option<u32>,
     /// Twists under force about z where the yaw is uncertain: [`next_motion`]; `None`,
     /// none.
     pub twist: Option<Twist>,
+}
+
+/// What decides a slide under force and where it presses after it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Slide {
+    /// The fit's radial clearance (m).
+    pub clearance: f64,
+    /// Where a slide that found no hole presses for its measurement.
+    pub press: SlidePress,
+}
+
+/// Where a slide under force that found no hole presses again for a static wrench (after
+/// sliding, friction holds part A sideways: [`World::slide_motion`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SlidePress {
+    /// At the estimate the slide crossed (its midpoint): near part B's likeliest place,
+    /// where the contact's wrench says most about the offset.
+    #[default]
+    Estimate,
+    /// Where the slide stopped, the far end of the spread.
+    End,
 }
 
 /// What decides a twist under force: the fit's tolerances.
@@ -74,8 +95,9 @@ pub struct Twist {
 pub enum Motion {
     /// A contact motion at this point (m).
     Contact([f64; 2]),
-    /// A slide under force between these points (m).
-    Slide([f64; 2], [f64; 2]),
+    /// A slide under force between the first two points (m), then, where it found no hole,
+    /// a press at the third.
+    Slide([f64; 2], [f64; 2], [f64; 2]),
     /// A twist under force at this point (m) from one yaw to another (rad).
     Twist([f64; 2], f64, f64),
 }
@@ -144,7 +166,7 @@ impl Spread {
 }
 
 /// The motion after a measurement that gave `estimate`, the TCP at `tcp`: a contact at the
-/// estimate (Algorithm 1), or, with `slide` (the fit's clearance), a slide under force
+/// estimate (Algorithm 1), or, with `slide`, a slide under force
 /// along the major axis of the estimate's spread, across [`SLIDE_SIGMAS`] of it each way,
 /// where the spread reaches beyond the capture and a slide is likelier to find the hole
 /// than a contact at the estimate (a slide through it covers the disc a contact would: with
@@ -153,7 +175,8 @@ impl Spread {
 /// lever hardly changes with the offset), and a camera sees one axis better than the other:
 /// the posterior is then a segment that contact motions would halve one by one, and that
 /// a slide crosses in one motion, dropping in where it finds the hole. The slide starts at
-/// the end nearer the TCP.
+/// the end nearer the TCP; where it finds no hole, part A presses again where
+/// [`SlidePress`] says (by default at the estimate: Algorithm 1's contact, after the sweep).
 ///
 /// With `twist`, where the spread across x, y lies within the capture and the yaw's spread
 /// beyond half the fit's play: a twist at the estimate through the whole period where the
@@ -164,7 +187,7 @@ impl Spread {
 pub fn next_motion(
     tcp: [f64; 2],
     estimate: &Estimate,
-    slide: Option<f64>,
+    slide: Option<Slide>,
     twist: Option<Twist>,
 ) -> Motion {
     let e = estimate.object;
@@ -175,20 +198,25 @@ pub fn next_motion(
             return Motion::Twist(e, yaw - half, yaw + half);
         }
     }
-    let Some(clearance) = slide else {
+    let Some(slide) = slide else {
         return Motion::Contact(e);
     };
     let spread = Spread::of(estimate);
-    let reach = CAPTURE * clearance;
+    let reach = CAPTURE * slide.clearance;
     if spread.major <= reach || spread.swept(reach) <= spread.within(reach) {
         return Motion::Contact(e);
     }
     let toward = (e[0] - tcp[0]) * spread.axis[0] + (e[1] - tcp[1]) * spread.axis[1];
     let u = spread.axis.map(|a| if toward < 0.0 { -a } else { a });
     let half = SLIDE_SIGMAS * spread.major;
+    let end = [e[0] + half * u[0], e[1] + half * u[1]];
     Motion::Slide(
         [e[0] - half * u[0], e[1] - half * u[1]],
-        [e[0] + half * u[0], e[1] + half * u[1]],
+        end,
+        match slide.press {
+            SlidePress::Estimate => e,
+            SlidePress::End => end,
+        },
     )
 }
 
@@ -229,6 +257,10 @@ pub struct Step {
     pub wrench: [f64; 6],
     /// The FMU's estimate after this contact (pf only).
     pub estimate: Option<Estimate>,
+    /// The FMU's estimate after the press a slide started from, read at rest before it slid
+    /// (pf only): a contact measurement of its own within the same motion.
+    #[serde(default)]
+    pub started: Option<Estimate>,
     /// An image's features went with the wrench.
     pub image: bool,
     /// The motion was a slide under force.
@@ -284,9 +316,13 @@ pub struct TrialResult {
 }
 
 impl TrialResult {
-    /// Contact measurements handed to the FMU (contact motions that did not insert the part).
+    /// Contact measurements handed to the FMU (contact motions that did not insert the
+    /// part, and the presses that slides started from).
     pub fn measurements(&self) -> usize {
-        self.steps.iter().filter(|s| s.estimate.is_some()).count()
+        self.steps
+            .iter()
+            .map(|s| usize::from(s.estimate.is_some()) + usize::from(s.started.is_some()))
+            .sum()
     }
 
     /// The result without its wall-clock times: what a repeated run (on other workers or
@@ -394,10 +430,13 @@ pub fn run_trial(
             matches!(motion, Motion::Slide(..)),
             matches!(motion, Motion::Twist(..)),
         );
-        let c = match motion {
-            Motion::Contact(p) => sim.contact_motion(p),
-            Motion::Slide(from, to) => sim.slide_motion(from, to),
-            Motion::Twist(p, from, to) => sim.twist_motion(p, from, to)?,
+        let (c, start) = match motion {
+            Motion::Contact(p) => (sim.contact_motion(p), None),
+            Motion::Slide(from, to, press) => {
+                let slid = sim.slide_motion(from, to, press);
+                (slid.end, slid.start)
+            }
+            Motion::Twist(p, from, to) => (sim.twist_motion(p, from, to)?, None),
         };
         sim_wall += t0.elapsed().as_secs_f64();
         sim_time += c.time;
@@ -408,6 +447,7 @@ pub fn run_trial(
                 rot: c.rot,
                 wrench,
                 estimate: None,
+                started: None,
                 image: false,
                 slide,
                 twist,
@@ -415,6 +455,14 @@ pub fn run_trial(
             success = true;
             break;
         }
+        // The press a slide started from, at rest: a static contact like any other.
+        let started = match (estimator.as_mut(), start) {
+            (Some(e), Some(s)) => {
+                let w = cfg.noise.apply(map_wrench(s.raw), &mut rng);
+                Some(e.measure(w, s.tcp, s.rot, None, None)?)
+            }
+            _ => None,
+        };
         let image = match (&estimator, eye.as_deref_mut()) {
             (Some(_), Some(eye)) => {
                 let f = eye.look(offset, c.tcp, seed.wrapping_add(steps.len() as u64 + 1))?;
@@ -430,18 +478,22 @@ pub fn run_trial(
                 // height, which a tilted TCP stands beside.
                 let lean = lean(&nalgebra::Rotation3::new(nalgebra::Vector3::from(c.rot)));
                 let tcp_at = |p: [f64; 2]| [p[0] + lean[0] * c.tcp[2], p[1] + lean[1] * c.tcp[2]];
-                let slide_start = match motion {
-                    Motion::Slide(from, _) => {
-                        let [x, y] = tcp_at(from);
-                        Some([x, y, c.rot[2]])
-                    }
-                    Motion::Twist(p, from, _) => {
-                        let [x, y] = tcp_at(p);
-                        Some([x, y, from])
-                    }
+                let at = |p: [f64; 2], rz: f64| {
+                    let [x, y] = tcp_at(p);
+                    [x, y, rz]
+                };
+                let swept = match motion {
+                    Motion::Slide(from, to, press) => Some(Swept {
+                        start: at(from, c.rot[2]),
+                        end: (press != to).then(|| at(to, c.rot[2])),
+                    }),
+                    Motion::Twist(p, from, _) => Some(Swept {
+                        start: at(p, from),
+                        end: None,
+                    }),
                     Motion::Contact(_) => None,
                 };
-                let est = e.measure(wrench, c.tcp, c.rot, slide_start, image.as_ref())?;
+                let est = e.measure(wrench, c.tcp, c.rot, swept, image.as_ref())?;
                 motion = next_motion([c.tcp[0], c.tcp[1]], &est, cfg.slide, cfg.twist);
                 sim.set_tcp_rotation(est.rot)?;
                 Some(est)
@@ -453,6 +505,7 @@ pub fn run_trial(
             rot: c.rot,
             wrench,
             estimate,
+            started,
             image: image.is_some(),
             slide,
             twist,
@@ -493,6 +546,7 @@ mod tests {
             rot,
             wrench: [0.0; 6],
             estimate: None,
+            started: None,
             image: false,
             slide: false,
             twist: false,
@@ -575,11 +629,22 @@ mod tests {
             std: [1e-4, 1e-5],
             ..Estimate::default()
         };
-        match next_motion(tcp, &along_x, Some(c), None) {
-            Motion::Slide(a, b) => {
+        let slide = |press| {
+            Some(Slide {
+                clearance: c,
+                press,
+            })
+        };
+        match next_motion(tcp, &along_x, slide(SlidePress::Estimate), None) {
+            Motion::Slide(a, b, p) => {
                 assert!((a[0] - 0.0012).abs() < 1e-12 && (b[0] - 0.0016).abs() < 1e-12);
                 assert!((a[1] - 0.002).abs() < 1e-12 && (b[1] - 0.002).abs() < 1e-12);
+                assert_eq!(p, along_x.object, "it presses again at the estimate");
             }
+            m => panic!("{m:?}"),
+        }
+        match next_motion(tcp, &along_x, slide(SlidePress::End), None) {
+            Motion::Slide(_, b, p) => assert_eq!(p, b, "it presses again where it stopped"),
             m => panic!("{m:?}"),
         }
         // The same along the diagonal (correlated x and y): the slide follows it, starting
@@ -591,8 +656,8 @@ mod tests {
             corr: 0.98,
             ..Estimate::default()
         };
-        match next_motion([0.001, 0.001], &diagonal, Some(c), None) {
-            Motion::Slide(a, b) => {
+        match next_motion([0.001, 0.001], &diagonal, slide(SlidePress::Estimate), None) {
+            Motion::Slide(a, b, _) => {
                 assert!(a[0] > 0.0 && (a[0] - a[1]).abs() < 2e-6, "{a:?}");
                 assert!((b[0] + a[0]).abs() < 1e-12 && (b[1] + a[1]).abs() < 1e-12);
             }
@@ -600,7 +665,10 @@ mod tests {
         }
         // A spread within the capture: a contact at the estimate; and a contact without
         // slides, whatever the spread.
-        for (std, slide) in [([2e-5, 3e-5], Some(c)), ([1e-4, 1e-5], None)] {
+        for (std, slide) in [
+            ([2e-5, 3e-5], slide(SlidePress::Estimate)),
+            ([1e-4, 1e-5], None),
+        ] {
             let e = Estimate {
                 object: [0.0003, 0.0],
                 std,
@@ -619,6 +687,10 @@ mod tests {
             play: 0.5f64.to_radians(),
             period: Some(period),
         };
+        let slide = Some(Slide {
+            clearance: c,
+            press: SlidePress::default(),
+        });
         let at = |std: [f64; 2], yaw_std: f64| Estimate {
             object: [0.001, -0.002],
             std,
@@ -628,7 +700,7 @@ mod tests {
         };
         // x, y within the capture, the yaw uncertain: a twist through one whole period
         // about the estimated yaw, at the estimate.
-        match next_motion([0.0; 2], &at([5e-6, 8e-6], 0.05), Some(c), Some(twist)) {
+        match next_motion([0.0; 2], &at([5e-6, 8e-6], 0.05), slide, Some(twist)) {
             Motion::Twist(p, from, to) => {
                 assert_eq!(p, [0.001, -0.002]);
                 assert!((from - (0.1 - period / 2.0)).abs() < 1e-12, "{from}");
@@ -639,12 +711,12 @@ mod tests {
         // The yaw known within the play, or x, y not yet within the capture: no twist.
         let known = at([5e-6, 8e-6], 0.001);
         assert_eq!(
-            next_motion([0.0; 2], &known, Some(c), Some(twist)),
+            next_motion([0.0; 2], &known, slide, Some(twist)),
             Motion::Contact(known.object)
         );
         let wide = at([1e-4, 1e-4], 0.05);
         assert!(!matches!(
-            next_motion([0.0; 2], &wide, Some(c), Some(twist)),
+            next_motion([0.0; 2], &wide, slide, Some(twist)),
             Motion::Twist(..)
         ));
         // Without symmetry: SLIDE_SIGMAS of the yaw's spread each way.
@@ -652,7 +724,7 @@ mod tests {
             period: None,
             ..twist
         };
-        match next_motion([0.0; 2], &at([5e-6, 8e-6], 0.05), Some(c), Some(open)) {
+        match next_motion([0.0; 2], &at([5e-6, 8e-6], 0.05), slide, Some(open)) {
             Motion::Twist(_, from, to) => {
                 assert!((to - from - 2.0 * SLIDE_SIGMAS * 0.05).abs() < 1e-12);
             }

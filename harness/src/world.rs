@@ -56,6 +56,16 @@ pub struct Contact {
     pub time: f64,
 }
 
+/// What a slide under force ends with: the press it started from, read at rest before it
+/// slid (none where it went in there, or where the world reads none), and its end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Slid {
+    /// The press at the slide's start.
+    pub start: Option<Contact>,
+    /// Where part A went in, else the press after the slide.
+    pub end: Contact,
+}
+
 /// A work cell that runs contact motions against part B at a true offset.
 pub trait World {
     /// Places part B at the true object offset (x, y) relative to the nominal goal (m): the
@@ -86,9 +96,11 @@ pub trait World {
     /// the nominal goal) with the imposed force until the contact settles.
     fn contact_motion(&mut self, xy: [f64; 2]) -> Contact;
 
-    /// A slide under force: a contact motion at `from`, then, still pressing, a straight
-    /// move to `to` that stops where part A drops into part B, else settles at `to`.
-    fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact;
+    /// A slide under force: a contact motion at `from` (its static contact read before it
+    /// slides), then, still pressing, a straight move to `to` that stops where part A drops
+    /// into part B, else settles at `to` and presses again for a static contact: where it
+    /// stopped when `press` is `to`, else at `press`.
+    fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2], press: [f64; 2]) -> Slid;
 
     /// A twist under force: a contact motion at `xy` with the task frame turned to yaw
     /// `from` (rad, about z), then, still pressing, a turn to `to` that stops where part A
@@ -364,10 +376,17 @@ impl World for MapWorld {
         self.contact_at(xy)
     }
 
-    fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2]) -> Contact {
+    fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2], press: [f64; 2]) -> Slid {
+        let start = self.contact_at(from);
+        if start.inserted {
+            return Slid {
+                start: None,
+                end: start,
+            };
+        }
         let len = (to[0] - from[0]).hypot(to[1] - from[1]);
         let samples = (len / self.fit.clearance() * SLIDE_SAMPLES_PER_CLEARANCE).ceil() as usize;
-        (0..=samples)
+        let end = (0..=samples)
             .map(|k| {
                 let t = k as f64 / samples.max(1) as f64;
                 [
@@ -376,7 +395,11 @@ impl World for MapWorld {
                 ]
             })
             .find(|&p| self.goes_in(p))
-            .map_or_else(|| self.contact_at(to), |p| self.contact_at(p))
+            .map_or_else(|| self.contact_at(press), |p| self.contact_at(p));
+        Slid {
+            start: Some(start),
+            end,
+        }
     }
 
     /// Turns through the yaws from `from` to `to`, stopping where part A goes in; on a map

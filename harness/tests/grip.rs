@@ -6,7 +6,7 @@ mod common;
 use harness::campaign::random_offsets;
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::{Noise, map_wrench};
-use harness::trial::{Strategy, TrialConfig, Truth};
+use harness::trial::{Slide, SlidePress, Strategy, TrialConfig, Truth};
 use harness::world::World;
 
 /// The peg_grip map computed from its CAD meshes, cached like a campaign's.
@@ -68,7 +68,10 @@ fn five_trials_with_an_unknown_grip_go_in_through_the_fmu() {
         noise: Noise::TYPICAL,
         spiral_step: 0.0,
         spiral_radius: 0.0,
-        slide: Some(task.geometry().expect("a [geometry]").clearance()),
+        slide: Some(Slide {
+            clearance: task.geometry().expect("a [geometry]").clearance(),
+            press: SlidePress::Estimate,
+        }),
         symmetry: None,
         twist: None,
         settings: Settings {

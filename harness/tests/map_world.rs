@@ -15,7 +15,7 @@ use harness::calibration::{Calibration, samples};
 use harness::campaign::{random_offsets, run_campaign};
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::{Noise, map_wrench};
-use harness::trial::{Strategy, TrialConfig, Truth, Twist};
+use harness::trial::{Slide, SlidePress, Strategy, TrialConfig, Truth, Twist};
 use harness::world::{Contact, MapWorld, World};
 
 /// Asserts that contact `m` read the force and torque of `map`'s contact at `at`; that
@@ -90,7 +90,9 @@ fn a_slide_drops_in_at_the_first_point_within_the_clearance() {
     world.set_object(hole);
     // Along x through the hole: in, within the clearance of the hole's centre, at the
     // near side.
-    let m = world.slide_motion([-0.0002, 0.0], [0.0006, 0.0]);
+    let m = world
+        .slide_motion([-0.0002, 0.0], [0.0006, 0.0], [0.0006, 0.0])
+        .end;
     assert!(m.inserted);
     let miss = (m.tcp[0] - hole[0]).hypot(m.tcp[1] - hole[1]);
     assert!(miss <= c && miss > 0.7 * c, "{miss}");
@@ -101,9 +103,16 @@ fn a_slide_drops_in_at_the_first_point_within_the_clearance() {
     );
     // Beside the hole by 1.5 clearances: no insertion, ends at `to` as a contact there.
     let (from, to) = ([-0.0002, 1.5 * c], [0.0006, 1.5 * c]);
-    let m = world.slide_motion(from, to);
-    assert!(!m.inserted);
-    assert_eq!(m, world.contact_motion(to));
+    let slid = world.slide_motion(from, to, to);
+    assert!(!slid.end.inserted);
+    assert_eq!(slid.end, world.contact_motion(to));
+    // It read the press it started from, and pressed again where it was told to.
+    assert_eq!(slid.start, Some(world.contact_motion(from)));
+    let mid = [0.0002, 1.5 * c];
+    assert_eq!(
+        world.slide_motion(from, to, mid).end,
+        world.contact_motion(mid)
+    );
 }
 
 #[test]
@@ -139,7 +148,10 @@ fn in_a_world_without_mismatch_the_defaults_insert_the_peg_in_two_and_a_half_con
         noise: Noise::TYPICAL,
         spiral_step: 0.0,
         spiral_radius: 0.0,
-        slide: Some(clearance),
+        slide: Some(Slide {
+            clearance,
+            press: SlidePress::Estimate,
+        }),
         symmetry: None,
         twist: None,
         settings: Settings::default(),
@@ -222,7 +234,10 @@ fn without_mismatch_the_spread_over_a_yaw_is_calibrated() {
         noise: Noise::TYPICAL,
         spiral_step: 0.0,
         spiral_radius: 0.0,
-        slide: Some(clearance),
+        slide: Some(Slide {
+            clearance,
+            press: SlidePress::Estimate,
+        }),
         symmetry: task.omega.symmetry,
         twist: Some(Twist {
             clearance,

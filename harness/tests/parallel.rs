@@ -12,7 +12,7 @@ use harness::eye::Eye;
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::Noise;
 use harness::sim::Sim;
-use harness::trial::{Strategy, TrialConfig, TrialResult, Truth};
+use harness::trial::{Slide, SlidePress, Strategy, TrialConfig, TrialResult, Truth};
 use harness::vision::Detector;
 
 /// The trial limits of these campaigns, with the FT-Map `map` and vision model `vision`.
@@ -24,7 +24,10 @@ fn config(task: &Task, map: Option<&Path>, vision: Option<&Path>) -> TrialConfig
         noise: Noise::TYPICAL,
         spiral_step: 0.0,
         spiral_radius: 0.0,
-        slide: Some(task.fit().expect("fit").clearance()),
+        slide: Some(Slide {
+            clearance: task.fit().expect("fit").clearance(),
+            press: SlidePress::Estimate,
+        }),
         symmetry: None,
         twist: None,
         settings: Settings {

@@ -9,7 +9,7 @@ mod common;
 use harness::campaign::{Campaign, CampaignOptions, Offsets};
 use harness::fmu_driver::{Fmu, Settings, default_fmu_path};
 use harness::sensor::{Noise, map_wrench};
-use harness::trial::{Strategy, TrialConfig, Twist};
+use harness::trial::{Slide, SlidePress, Strategy, TrialConfig, Twist};
 use harness::world::World;
 
 /// `v` turned by `angle` about z.
@@ -207,7 +207,10 @@ fn five_trials_with_an_unknown_yaw_go_in_through_the_fmu() {
         noise: Noise::TYPICAL,
         spiral_step: 0.0,
         spiral_radius: 0.0,
-        slide: Some(clearance),
+        slide: Some(Slide {
+            clearance,
+            press: SlidePress::Estimate,
+        }),
         symmetry: task.omega.symmetry,
         twist: Some(Twist {
             clearance,
@@ -287,7 +290,7 @@ fn on_a_tilted_top_a_press_reads_the_imposed_force_and_a_slide_goes_its_whole_wa
     for tcp in [[0.0; 3], tilt] {
         sim.set_tcp_rotation(tcp).expect("the wrist tilts");
         let (from, to) = ([-0.003, -0.006], [0.003, -0.006]);
-        let slid = sim.slide_motion(from, to);
+        let slid = sim.slide_motion(from, to, to).end;
         assert!(!slid.inserted, "{slid:?}");
         let foot = harness::world::foot(slid.tcp, &nalgebra::Rotation3::new(slid.rot.into()));
         assert!(

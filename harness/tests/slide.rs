@@ -21,7 +21,8 @@ fn a_slide_drops_in_where_it_crosses_the_hole_and_not_beside_it() {
     ] {
         let from = [hole[0] - 0.0004, hole[1] + beside];
         let to = [hole[0] + 0.0004, hole[1] + beside];
-        let m = sim.slide_motion(from, to);
+        let slid = sim.slide_motion(from, to, to);
+        let m = slid.end;
         assert!(m.settled, "{beside}: {m:?}");
         assert_eq!(
             m.inserted, inserts,
@@ -40,10 +41,29 @@ fn a_slide_drops_in_where_it_crosses_the_hole_and_not_beside_it() {
                 assert!((x - y).abs() < 1e-4, "{beside}: {m:?} {end:?}");
             }
             assert!(m.raw[0].hypot(m.raw[1]) < 0.1, "{beside}: {m:?}");
+            // It read the press it started from at rest, as a contact motion there reads it,
+            // and, told to press again halfway, reads the static contact there.
+            let start = slid.start.expect("the press the slide started from");
+            let there = sim.contact_motion(from);
+            for (x, y) in start.raw.iter().zip(&there.raw) {
+                assert!((x - y).abs() < 1e-4, "{beside}: {start:?} {there:?}");
+            }
+            let mid = [hole[0], hole[1] + beside];
+            let pressed = sim.slide_motion(from, to, mid).end;
+            let there = sim.contact_motion(mid);
+            assert!(
+                (pressed.tcp[0] - mid[0]).abs() < 2e-5,
+                "{beside}: {pressed:?}"
+            );
+            for (x, y) in pressed.raw.iter().zip(&there.raw) {
+                assert!((x - y).abs() < 1e-4, "{beside}: {pressed:?} {there:?}");
+            }
         }
     }
     // A slide of no length reads what a contact motion reads (it settles twice).
-    let a = sim.slide_motion([0.001, 0.0], [0.001, 0.0]);
+    let a = sim
+        .slide_motion([0.001, 0.0], [0.001, 0.0], [0.001, 0.0])
+        .end;
     let b = sim.contact_motion([0.001, 0.0]);
     for (x, y) in a.raw.iter().zip(&b.raw) {
         assert!((x - y).abs() < 1e-4, "{a:?} {b:?}");
@@ -69,7 +89,7 @@ fn on_every_scene_a_slide_drops_in_within_the_clearance_and_not_beyond() {
         for (beside, inserts) in [(0.9 * c, true), (1.5 * c, false)] {
             let from = [hole[0] - 0.0004, hole[1] + beside];
             let to = [hole[0] + 0.0004, hole[1] + beside];
-            let m = sim.slide_motion(from, to);
+            let m = sim.slide_motion(from, to, to).end;
             assert_eq!(
                 m.inserted, inserts,
                 "{name}: a slide {beside} m beside the hole: {m:?}"

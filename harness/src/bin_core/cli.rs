@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use harness::campaign::{CampaignOptions, CentreMap, Offsets, VisionMethod};
-use harness::trial::Strategy;
+use harness::trial::{SlidePress, Strategy};
 use harness::vision::Detector;
 use harness::world::WorldKind;
 
@@ -204,6 +204,25 @@ pub enum StrategyArg {
     Spiral,
 }
 
+/// Where a slide that found no hole presses again.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SlidePressArg {
+    /// At the estimate it crossed (its midpoint): the contact Algorithm 1 makes, after the
+    /// sweep.
+    Estimate,
+    /// Where it stopped, the far end of the spread.
+    End,
+}
+
+impl From<SlidePressArg> for SlidePress {
+    fn from(s: SlidePressArg) -> Self {
+        match s {
+            SlidePressArg::Estimate => Self::Estimate,
+            SlidePressArg::End => Self::End,
+        }
+    }
+}
+
 /// Settings shared by `trials` and `sweep`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
@@ -254,6 +273,9 @@ pub struct RunArgs {
     /// (pf only).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub slide: Switch,
+    /// Where a slide that found no hole presses again for its measurement.
+    #[arg(long, value_enum, default_value_t = SlidePressArg::Estimate)]
+    pub slide_press: SlidePressArg,
     /// Twists under force about z across the yaw's spread once x, y are within the
     /// capture, where the task's yaw is uncertain (pf only).
     #[arg(long, value_enum, default_value_t = Switch::On)]
@@ -425,6 +447,7 @@ impl RunArgs {
             strategy: self.strategy.into(),
             sensor_noise: self.sensor_noise == Switch::On,
             slide: self.slide == Switch::On,
+            slide_press: self.slide_press.into(),
             twist: self.twist == Switch::On,
             fmu: self.fmu,
             max_contacts: self.max_contacts,
