@@ -220,7 +220,8 @@ impl Sim {
             .collect()
     }
 
-    /// A contact motion at `xy`, then a slide or a twist, if any.
+    /// A contact motion at `xy`, then a slide or a twist, if any: where it ended, and the
+    /// press a sweep started from, read at rest.
     fn motion(&mut self, xy: [f64; 2], mut sweep: Option<Sweep>) -> Slid {
         let d = &mut self.data;
         d.reset();
