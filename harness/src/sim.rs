@@ -470,17 +470,18 @@ enum Sweep {
 }
 
 impl Sim {
-    /// A sweep's end: itself where part A went in, else a fresh press where it stopped
-    /// (after sliding or turning, static friction holds part A against the stiff servos
-    /// with up to mu times the imposed force, which no map of static contacts explains;
-    /// lifted by the approach clearance and pressed again, it reads the static contact).
-    fn pressed_again(&mut self, swept: Contact) -> Contact {
+    /// A sweep's end: itself where part A went in, else a fresh press at `at` (none: where
+    /// it stopped; after sliding or turning, static friction holds part A against the stiff
+    /// servos with up to mu times the imposed force, which no map of static contacts
+    /// explains; lifted by the approach clearance and pressed again, it reads the static
+    /// contact).
+    fn pressed_again(&mut self, swept: Contact, at: Option<[f64; 2]>) -> Contact {
         if swept.inserted {
             return swept;
         }
         // Where a motion is commanded: a tilted carriage stands beside it.
         let [ax, ay, az] = self.wrist_angles;
-        let at = foot(swept.tcp, &Rotation3::from_euler_angles(ax, ay, az));
+        let at = at.unwrap_or_else(|| foot(swept.tcp, &Rotation3::from_euler_angles(ax, ay, az)));
         let pressed = self.motion(at, None).end;
         Contact {
             time: swept.time + pressed.time,
@@ -567,16 +568,10 @@ impl World for Sim {
     /// pressed again, it reads a static contact.
     fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2], press: [f64; 2]) -> Slid {
         let Slid { start, end } = self.motion(from, Some(Sweep::Line(to)));
-        let end = if end.inserted || press == to {
-            self.pressed_again(end)
-        } else {
-            let pressed = self.motion(press, None).end;
-            Contact {
-                time: end.time + pressed.time,
-                ..pressed
-            }
-        };
-        Slid { start, end }
+        Slid {
+            start,
+            end: self.pressed_again(end, (press != to).then_some(press)),
+        }
     }
 
     /// The twist turns at [`TWIST_SPEED`] and, like a slide, stops where part A drops by
@@ -587,7 +582,7 @@ impl World for Sim {
         self.set_tcp_rotation([0.0, 0.0, from])?;
         let twisted = self.motion(xy, Some(Sweep::Turn(to))).end;
         self.wrist_angles[2] = twisted.rot[2];
-        Ok(self.pressed_again(twisted))
+        Ok(self.pressed_again(twisted, None))
     }
 
     fn simulated(&self) -> f64 {

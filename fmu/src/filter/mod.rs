@@ -580,16 +580,12 @@ impl Filter {
                 Some(fit) if fit.went_in => {
                     fit.term.add_went_in_log_likelihood(pos, rel, fit.press, ll);
                 }
-                Some(fit) if fit.press == fit.end => {
-                    fit.term
-                        .add_log_likelihood(pos, rel, &[[fit.start, fit.end]], ll);
+                Some(fit) => {
+                    // A press at the line's end lies on it: the line alone.
+                    let motions = [[fit.start, fit.end], [fit.press, fit.press]];
+                    let count = if fit.press == fit.end { 1 } else { 2 };
+                    fit.term.add_log_likelihood(pos, rel, &motions[..count], ll);
                 }
-                Some(fit) => fit.term.add_log_likelihood(
-                    pos,
-                    rel,
-                    &[[fit.start, fit.end], [fit.press, fit.press]],
-                    ll,
-                ),
                 None => {}
             }
         } else {
