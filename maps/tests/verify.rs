@@ -25,11 +25,11 @@ fn every_task_s_map_holds_the_exact_contact_height_and_mostly_its_centroid() {
     // translations; the lever point within a pixel of the exact centroid in 99.1-100 % of
     // the cells where the parts stay level (the octagon's strips a pixel or two wide along
     // some flats beside wider ones are under-resolved: 99.4 % of its cells by the closed
-    // form), so the bound here is below the 99.9 %; tilted contacts on a wall are
-    // not seen along the approach at all, and a rim touching at two points some
-    // micrometres apart in height puts the map's lever between them: on
-    // peg_in_hole_4dof's tilts at 0.25 degrees, 89.5 % of 400 cells (81.75 % before the
-    // verifier looked for rims no first ray meets).
+    // form), so the bound here is below the 99.9 %. On peg_in_hole_4dof's tilts
+    // at 0.25 degrees, 98.0 % of 200 cells since tilted parts' thin bands are refined too
+    // (map revision 8; 89.5 % before): a contact on a wall is not seen along the approach
+    // at all, and a rim touching at two points some micrometres apart in height puts the
+    // map's lever between them.
     // 40 cells of a turned map, 20 of a map of translations (the tight fit's crescents take
     // a second a cell).
     for name in Task::names() {
@@ -53,7 +53,7 @@ fn every_task_s_map_holds_the_exact_contact_height_and_mostly_its_centroid() {
         );
         let centroid = v.centroid_share().expect("centroid maps");
         assert!(
-            centroid >= if turned { 0.8 } else { 0.95 },
+            centroid >= if turned { 0.9 } else { 0.95 },
             "{name}: centroid within a pixel in {:.1} %",
             100.0 * centroid
         );
