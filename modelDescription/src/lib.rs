@@ -3,8 +3,9 @@
 //! The FMU dispatches its get/set calls through [`VARIABLES`]; the packager writes
 //! [`xml()`]; the FMU, its tests and the harness's FMI driver take the names of the
 //! variables that belong together from the groups ([`WRENCH`], [`TCP`], [`CONTACT`],
-//! [`SLIDE`], [`SLIDE_START`], [`SLIDE_END_VALID`], [`SLIDE_END`], [`VISION_FEATURES`], [`VISION_VALID`], [`OBJECT`], [`GRIP`]
-//! and their spreads); both read the [`trace`] file format.
+//! [`SLIDE`], [`SLIDE_START`], [`SLIDE_END_VALID`], [`SLIDE_END`], [`VISION_FEATURES`],
+//! [`VISION_VALID`], [`OBJECT`], [`GRIP`] and their spreads); both read the [`trace`] file
+//! format.
 
 mod table;
 pub mod trace;
