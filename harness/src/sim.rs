@@ -416,6 +416,7 @@ impl Sim {
         Slid {
             end: contact(first.unwrap_or_else(|| read(d)), settled, time),
             start: pressed.map(|(r, t)| contact(r, true, t)),
+            stopped: planned,
         }
     }
 }
@@ -567,10 +568,10 @@ impl World for Sim {
     /// which no map of static contacts explains; lifted by the approach clearance and
     /// pressed again, it reads a static contact.
     fn slide_motion(&mut self, from: [f64; 2], to: [f64; 2], press: [f64; 2]) -> Slid {
-        let Slid { start, end } = self.motion(from, Some(Sweep::Line(to)));
+        let slid = self.motion(from, Some(Sweep::Line(to)));
         Slid {
-            start,
-            end: self.pressed_again(end, (press != to).then_some(press)),
+            end: self.pressed_again(slid.end, (press != to).then_some(press)),
+            ..slid
         }
     }
 

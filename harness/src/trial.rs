@@ -430,13 +430,13 @@ pub fn run_trial(
             matches!(motion, Motion::Slide(..)),
             matches!(motion, Motion::Twist(..)),
         );
-        let (c, start) = match motion {
-            Motion::Contact(p) => (sim.contact_motion(p), None),
+        let (c, start, stopped) = match motion {
+            Motion::Contact(p) => (sim.contact_motion(p), None, p),
             Motion::Slide(from, to, press) => {
                 let slid = sim.slide_motion(from, to, press);
-                (slid.end, slid.start)
+                (slid.end, slid.start, slid.stopped)
             }
-            Motion::Twist(p, from, to) => (sim.twist_motion(p, from, to)?, None),
+            Motion::Twist(p, from, to) => (sim.twist_motion(p, from, to)?, None, p),
         };
         sim_wall += t0.elapsed().as_secs_f64();
         sim_time += c.time;
@@ -483,9 +483,11 @@ pub fn run_trial(
                     [x, y, rz]
                 };
                 let swept = match motion {
+                    // A slide pressed again elsewhere rules out the line up to where it
+                    // stopped: its far end, or short of it where part A dropped and jammed.
                     Motion::Slide(from, to, press) => Some(Swept {
                         start: at(from, c.rot[2]),
-                        end: (press != to).then(|| at(to, c.rot[2])),
+                        end: (press != to).then(|| at(stopped, c.rot[2])),
                     }),
                     Motion::Twist(p, from, _) => Some(Swept {
                         start: at(p, from),

@@ -64,6 +64,9 @@ pub struct Slid {
     pub start: Option<Contact>,
     /// Where part A went in, else the press after the slide.
     pub end: Contact,
+    /// Where the slide stopped, as commanded (m): its far end, or short of it where part A
+    /// dropped into part B.
+    pub stopped: [f64; 2],
 }
 
 /// A work cell that runs contact motions against part B at a true offset.
@@ -382,11 +385,12 @@ impl World for MapWorld {
             return Slid {
                 start: None,
                 end: start,
+                stopped: from,
             };
         }
         let len = (to[0] - from[0]).hypot(to[1] - from[1]);
         let samples = (len / self.fit.clearance() * SLIDE_SAMPLES_PER_CLEARANCE).ceil() as usize;
-        let end = (0..=samples)
+        let dropped = (0..=samples)
             .map(|k| {
                 let t = k as f64 / samples.max(1) as f64;
                 [
@@ -394,11 +398,11 @@ impl World for MapWorld {
                     from[1] + t * (to[1] - from[1]),
                 ]
             })
-            .find(|&p| self.goes_in(p))
-            .map_or_else(|| self.contact_at(press), |p| self.contact_at(p));
+            .find(|&p| self.goes_in(p));
         Slid {
             start: Some(start),
-            end,
+            end: self.contact_at(dropped.unwrap_or(press)),
+            stopped: dropped.unwrap_or(to),
         }
     }
 

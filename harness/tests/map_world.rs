@@ -90,10 +90,11 @@ fn a_slide_drops_in_at_the_first_point_within_the_clearance() {
     world.set_object(hole);
     // Along x through the hole: in, within the clearance of the hole's centre, at the
     // near side.
-    let m = world
-        .slide_motion([-0.0002, 0.0], [0.0006, 0.0], [0.0006, 0.0])
-        .end;
+    let slid = world.slide_motion([-0.0002, 0.0], [0.0006, 0.0], [0.0006, 0.0]);
+    let m = slid.end;
     assert!(m.inserted);
+    // It stopped where it went in, short of its far end.
+    assert_eq!([m.tcp[0], m.tcp[1]], slid.stopped);
     let miss = (m.tcp[0] - hole[0]).hypot(m.tcp[1] - hole[1]);
     assert!(miss <= c && miss > 0.7 * c, "{miss}");
     assert!(
@@ -106,6 +107,7 @@ fn a_slide_drops_in_at_the_first_point_within_the_clearance() {
     let slid = world.slide_motion(from, to, to);
     assert!(!slid.end.inserted);
     assert_eq!(slid.end, world.contact_motion(to));
+    assert_eq!(slid.stopped, to);
     // It read the press it started from, and pressed again where it was told to.
     assert_eq!(slid.start, Some(world.contact_motion(from)));
     let mid = [0.0002, 1.5 * c];

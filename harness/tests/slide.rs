@@ -32,10 +32,14 @@ fn a_slide_drops_in_where_it_crosses_the_hole_and_not_beside_it() {
             // It stopped where it dropped in: within the clearance of the hole.
             let off = (m.tcp[0] - hole[0]).hypot(m.tcp[1] - hole[1]);
             assert!(off < c, "{beside}: {m:?}");
+            // And says so: it stopped short of its far end, where part A dropped.
+            let [sx, sy] = slid.stopped;
+            assert!((sx - hole[0]).hypot(sy - hole[1]) < c, "{beside}: {slid:?}");
         } else {
             // It ran to its end, and reads the static contact there, not the friction that
             // held part A sideways while it slid (15 N, 0.9 N.m about the sensor).
             assert!((m.tcp[0] - to[0]).abs() < 2e-5, "{beside}: {m:?}");
+            assert_eq!(slid.stopped, to, "{beside}");
             let end = sim.contact_motion([m.tcp[0], m.tcp[1]]);
             for (x, y) in m.raw.iter().zip(&end.raw) {
                 assert!((x - y).abs() < 1e-4, "{beside}: {m:?} {end:?}");
