@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 
-use crate::depth::cpu::CpuBackend;
+use crate::depth::cpu::{CpuBackend, WholeRows, contact_in_place};
 use crate::depth::{
     ContactSummary, DepthBackend, DepthImage, PixelWindow, RenderJob, Shift, Surface, View,
 };
@@ -384,21 +384,19 @@ impl Context<'_> {
             .zip(&summaries)
             .map(|(shift, c)| thin(c).then(|| Fine::windows(c, *shift, &setup, refine)))
             .collect();
-        let fine = Fine::render(self, view, [a_pose, b_pose], &windows, pixel, refine)?;
+        let poses = [a_pose, b_pose];
+        let fine = Fine::render(self, view, poses, &windows, pixel, refine, &b_normals)?;
         // Filled in place (every shift's slot known beforehand): a collection of unknown
         // length would grow by copies, a large part of a map's time.
         let mut contacts: Vec<(ContactSummary, WrenchSetup)> =
             summaries.into_iter().map(|c| (c, setup)).collect();
         if let Some(fine) = &fine {
-            (contacts.par_iter_mut().zip(&shifts).zip(&windows)).try_for_each(
-                |((slot, shift), w)| -> Result<()> {
-                    if let Some(w) = w {
-                        let c = std::mem::replace(&mut slot.0, ContactSummary::none(0.0));
-                        *slot = fine.contact(c, *shift, w, &setup, &b_normals)?;
-                    }
-                    Ok(())
-                },
-            )?;
+            (contacts.par_iter_mut().zip(&shifts).zip(&windows)).for_each(|((slot, shift), w)| {
+                if let Some(w) = w {
+                    let c = std::mem::replace(&mut slot.0, ContactSummary::none(0.0));
+                    *slot = fine.contact(c, *shift, w, &setup, &b_normals);
+                }
+            });
         }
         let s0 = Point3::from(self.task.contact.sensor_origin);
         let mut out = vec![(0, [0.0; NCH]); cells.len()];
@@ -458,6 +456,8 @@ struct Fine<'a> {
     refine: i64,
     a: DepthImage,
     b: DepthImage,
+    /// What holds of their whole rows.
+    rows: WholeRows,
 }
 
 impl<'a> Fine<'a> {
@@ -499,8 +499,8 @@ impl<'a> Fine<'a> {
         [a, b]
     }
 
-    /// A and B (at `poses`) rendered `refine` times finer than `coarse_pixel` over the union
-    /// of `windows`; `None` where no region is thin.
+    /// A and B (at `poses`; B's normals `b_normals`) rendered `refine` times finer than
+    /// `coarse_pixel` over the union of `windows`; `None` where no region is thin.
     fn render(
         ctx: &'a Context<'a>,
         view: View,
@@ -508,6 +508,7 @@ impl<'a> Fine<'a> {
         windows: &[Option<[PixelWindow; 2]>],
         coarse_pixel: f64,
         refine: i64,
+        b_normals: &[[f32; 3]],
     ) -> Result<Option<Self>> {
         let Some(union) = windows
             .iter()
@@ -525,15 +526,18 @@ impl<'a> Fine<'a> {
             window,
             pixel: coarse_pixel / refine as f64,
         };
+        let a = ctx
+            .backend
+            .render(&job(ctx.mesh_a, poses[0], Surface::Bottom, union[0]))?;
+        let b = ctx
+            .backend
+            .render(&job(ctx.mesh_b, poses[1], Surface::Top, union[1]))?;
         Ok(Some(Self {
             ctx,
             refine,
-            a: ctx
-                .backend
-                .render(&job(ctx.mesh_a, poses[0], Surface::Bottom, union[0]))?,
-            b: ctx
-                .backend
-                .render(&job(ctx.mesh_b, poses[1], Surface::Top, union[1]))?,
+            rows: WholeRows::of(&a, &b, b_normals),
+            a,
+            b,
         }))
     }
 
@@ -546,7 +550,7 @@ impl<'a> Fine<'a> {
         windows: &[PixelWindow; 2],
         coarse: &WrenchSetup,
         b_normals: &[[f32; 3]],
-    ) -> Result<(ContactSummary, WrenchSetup)> {
+    ) -> (ContactSummary, WrenchSetup) {
         let [a_win, b_win] = *windows;
         let shift = Shift {
             du: shift.du * self.refine,
@@ -558,23 +562,22 @@ impl<'a> Fine<'a> {
             ..*coarse
         };
         let tolerance = self.ctx.task.depth.tolerance as f32;
-        // On the CPU whatever the backend: each region is one small window, for which a GPU
-        // dispatch (and on lavapipe its setup) costs far more than the reduction itself.
-        Ok(
-            match CpuBackend
-                .contacts(
-                    &self.a.crop(a_win),
-                    &self.b.crop(b_win),
-                    b_normals,
-                    &[shift],
-                    tolerance,
-                )?
-                .pop()
-            {
-                Some(fine) if fine.count > 0 => (fine, setup),
-                _ => (c, *coarse),
-            },
-        )
+        // On the CPU whatever the backend, in place: each region is one small window of the
+        // finer images, for which a GPU dispatch (and on lavapipe its setup) costs far more
+        // than the reduction itself.
+        let fine = contact_in_place(
+            self.a.patch(a_win),
+            self.b.patch(b_win),
+            &self.rows,
+            b_normals,
+            shift,
+            tolerance,
+        );
+        if fine.count > 0 {
+            (fine, setup)
+        } else {
+            (c, *coarse)
+        }
     }
 }
 

@@ -159,6 +159,9 @@ enum Cmd {
         /// Seed of the cell sample and of the rays' offset from the pixel lattice.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// How many of the cells farthest out of bounds to list.
+        #[arg(long, default_value_t = 5)]
+        worst: usize,
     },
     /// Makes tasks from a user's meshes.
     Task {
@@ -303,7 +306,8 @@ fn main() -> Result<()> {
             task,
             samples,
             seed,
-        } => cmd_verify(&file, task.as_deref(), samples, seed),
+            worst,
+        } => cmd_verify(&file, task.as_deref(), samples, seed, worst),
     }
 }
 
@@ -335,7 +339,13 @@ fn load_part(part: &ftmap::task::Part) -> Result<ftmap::mesh::Mesh> {
     Ok(mesh)
 }
 
-fn cmd_verify(file: &Path, task: Option<&str>, samples: usize, seed: u64) -> Result<()> {
+fn cmd_verify(
+    file: &Path,
+    task: Option<&str>,
+    samples: usize,
+    seed: u64,
+    worst: usize,
+) -> Result<()> {
     let map = format::load(file)?;
     let beside = file.with_file_name("task.toml");
     let task = match task {
@@ -383,7 +393,7 @@ fn cmd_verify(file: &Path, task: Option<&str>, samples: usize, seed: u64) -> Res
             map.meta().model
         ),
     }
-    for c in v.worst(5) {
+    for c in v.worst(worst) {
         let coords: Vec<String> = map
             .grid()
             .axes()

@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 use rayon::prelude::*;
 use wide::f32x8;
 
-use crate::depth::{ContactSummary, DepthBackend, DepthImage, RenderJob, Shift, Surface};
+use crate::depth::{ContactSummary, DepthBackend, DepthImage, Patch, RenderJob, Shift, Surface};
 use crate::error::Result;
 
 /// The CPU backend.
@@ -102,17 +102,27 @@ impl DepthBackend for CpuBackend {
         shifts: &[Shift],
         tolerance: f32,
     ) -> Result<Vec<ContactSummary>> {
-        // A single shift (a thin region again at the finer pixel) reads each of B's pixels
-        // under A once: tables and runs over all of B would cost more than they save.
-        let many = shifts.len() > 1;
+        // A single shift reads each of B's pixels under A once: tables and runs over all of
+        // B would cost more than they save.
+        if let [s] = shifts {
+            let whole = WholeRows::of(a, b, b_normals);
+            return Ok(vec![contact_in_place(
+                a.whole(),
+                b.whole(),
+                &whole,
+                b_normals,
+                *s,
+                tolerance,
+            )]);
+        }
         let rows = Rows {
             spans: RowSpans::of(a),
             flat: flat_rows(a),
             solid: solid_rows(a),
             normals: Normals::of(b, b_normals),
-            runs: many.then(|| Runs::of(b)),
+            runs: Runs::of(b),
         };
-        let ranges = RowRanges::of(b, if many { &rows.solid } else { &[] });
+        let ranges = RowRanges::of(b, &rows.solid);
         // Each strip fills its own slots of the output.
         let mut out = vec![ContactSummary::none(f32::INFINITY); shifts.len()];
         let mut rest = out.as_mut_slice();
@@ -177,19 +187,21 @@ impl RowSpans {
         let w = a.window.width;
         Self(
             (0..a.window.height)
-                .map(|r| {
-                    let row = &a.height[r * w..(r + 1) * w];
-                    let first = row.iter().position(|h| h.is_finite())?;
-                    let last = row.iter().rposition(|h| h.is_finite())?;
-                    // Widen to whole lanes of 8 where the row allows (the extra pixels are
-                    // empty, so they never touch): the lane loops then need no remainder.
-                    let c0 = first - first % LANES;
-                    let c1 = (c0 + (last - c0 + 1).div_ceil(LANES) * LANES).min(w) - 1;
-                    Some((c0, c1))
-                })
+                .map(|r| lane_span(&a.height[r * w..(r + 1) * w]))
                 .collect(),
         )
     }
+}
+
+/// A row's first and last column with a surface, widened to whole lanes of 8 where the row
+/// allows (the extra pixels are empty, so they never touch): the lane loops then need no
+/// remainder.
+fn lane_span(row: &[f32]) -> Option<(usize, usize)> {
+    let first = row.iter().position(|h| h.is_finite())?;
+    let last = row.iter().rposition(|h| h.is_finite())?;
+    let c0 = first - first % LANES;
+    let c1 = (c0 + (last - c0 + 1).div_ceil(LANES) * LANES).min(row.len()) - 1;
+    Some((c0, c1))
 }
 
 /// The row of A (r) overlapping B under a shift: A columns c0..=c1 and the B slice start.
@@ -401,13 +413,7 @@ impl<'b> Normals<'b> {
     fn of(b: &'b DepthImage, bn: &'b [[f32; 3]]) -> Self {
         let w = b.window.width;
         let row_uniform = (0..b.window.height)
-            .map(|r| {
-                let mut seen = b.tri[r * w..(r + 1) * w]
-                    .iter()
-                    .filter_map(|&t| bn.get(t as usize));
-                let first = *seen.next().unwrap_or(&[0.0; 3]);
-                seen.all(|n| *n == first).then_some(first)
-            })
+            .map(|r| uniform_normal(&b.tri[r * w..(r + 1) * w], bn))
             .collect();
         Self {
             tri: &b.tri,
@@ -430,16 +436,38 @@ impl<'b> Normals<'b> {
     }
 }
 
+/// The normal shared by every pixel of a row of B that sees the triangles `tris` (normals
+/// `bn`), if they share one ([0, 0, 0] where the row sees none).
+fn uniform_normal(tris: &[u32], bn: &[[f32; 3]]) -> Option<[f32; 3]> {
+    let (mut first, mut last) = (None, u32::MAX);
+    // A triangle seen again at once has its normal compared already.
+    for &t in tris {
+        if t == last {
+            continue;
+        }
+        last = t;
+        match (bn.get(t as usize), first) {
+            (Some(n), None) => first = Some(*n),
+            (Some(n), Some(f)) if *n != f => return None,
+            _ => {}
+        }
+    }
+    Some(first.unwrap_or([0.0; 3]))
+}
+
 /// Per row of A's image, its height when all its pixels with a surface share one.
 fn flat_rows(a: &DepthImage) -> Vec<Option<f32>> {
     a.height
         .chunks_exact(a.window.width)
-        .map(|row| {
-            let mut h = row.iter().copied().filter(|h| h.is_finite());
-            let first = h.next().unwrap_or(0.0);
-            h.all(|x| x == first).then_some(first)
-        })
+        .map(flat_row)
         .collect()
+}
+
+/// A row's height when all its pixels with a surface share one.
+fn flat_row(row: &[f32]) -> Option<f32> {
+    let mut h = row.iter().copied().filter(|h| h.is_finite());
+    let first = h.next().unwrap_or(0.0);
+    h.all(|x| x == first).then_some(first)
 }
 
 /// A row of A whose surface is one unbroken run at one height.
@@ -554,8 +582,8 @@ struct Rows<'b> {
     flat: Vec<Option<f32>>,
     solid: Vec<Option<Solid>>,
     normals: Normals<'b>,
-    /// B's runs, where more than one shift reads B.
-    runs: Option<Runs>,
+    /// B's runs.
+    runs: Runs,
 }
 
 /// Longest run of shifts that one pass over A's rows serves.
@@ -692,6 +720,8 @@ fn summarize(
     let thr = gap + tol;
     let shift_rows = t * gaps.height..(t + 1) * gaps.height;
     let whole = &gaps.whole[shift_rows.clone()];
+    let touching = gaps.rows[shift_rows.clone()].iter().filter(|&&g| g <= thr);
+    out.rows.reserve_exact(touching.count());
     for (r, &row_gap) in gaps.rows[shift_rows].iter().enumerate() {
         // Rows that miss B have an infinite gap.
         if row_gap > thr {
@@ -722,7 +752,7 @@ fn summarize(
                 }
             }
             ((Some(h), Some(normal)), solid) => {
-                let runs = rows.runs.as_ref().filter(|runs| runs.few[brow]);
+                let runs = rows.runs.few[brow].then_some(&rows.runs);
                 let mut r = match (solid, runs) {
                     // The run's pixels within B's row.
                     (Some(sd), Some(runs)) => {
@@ -741,17 +771,119 @@ fn summarize(
             }
             _ => row_sums::<true>(av, bv, nv(), thr, p.c0 as f32),
         };
-        if r.count == 0.0 {
+        add_row(&mut out, p.r, &r);
+    }
+    out
+}
+
+/// Adds the sums of A's row `r` to a contact summary (nothing for a row without contact).
+fn add_row(out: &mut ContactSummary, r: usize, sums: &RowSums) {
+    if sums.count == 0.0 {
+        return;
+    }
+    out.count += sums.count as u32;
+    out.sum_col += f64::from(sums.sum_col);
+    out.sum_row += f64::from(sums.count) * r as f64;
+    out.sum_height += f64::from(sums.sum_height);
+    for (acc, v) in out.sum_normal.iter_mut().zip(sums.normal) {
+        *acc += f64::from(v);
+    }
+    out.rows
+        .push((r as u32, sums.first as u32, sums.last as u32));
+}
+
+/// What holds of whole rows of two images, A's and B's, and so of their rows in any window
+/// ([`contact_in_place`]): a row of A flat as a whole is flat, at its height, wherever A has
+/// a surface in it; a row of B whose pixels share one normal shares it wherever B has one.
+pub struct WholeRows {
+    /// Per row of A, its height when all its pixels with a surface share one.
+    flat: Vec<Option<f32>>,
+    /// Per row of B, the normal all its pixels share, if they share one.
+    uniform: Vec<Option<[f32; 3]>>,
+}
+
+impl WholeRows {
+    /// The rows of `a` and of `b` (normals `b_normals`).
+    pub fn of(a: &DepthImage, b: &DepthImage, b_normals: &[[f32; 3]]) -> Self {
+        let w = b.window.width;
+        Self {
+            flat: flat_rows(a),
+            uniform: (0..b.window.height)
+                .map(|r| uniform_normal(&b.tri[r * w..(r + 1) * w], b_normals))
+                .collect(),
+        }
+    }
+}
+
+/// The contact summary of `a` against `b` (normals `b_normals`) under the one shift `s`,
+/// read in place: exactly what [`CpuBackend::contacts`] gives for it, from each row's least
+/// gap and then the rows in contact alone (`whole`: what holds of the images' whole rows).
+/// A thin contact region computed again at a finer pixel is one such window of the finer
+/// images.
+pub fn contact_in_place(
+    a: Patch<'_>,
+    b: Patch<'_>,
+    whole: &WholeRows,
+    b_normals: &[[f32; 3]],
+    s: Shift,
+    tolerance: f32,
+) -> ContactSummary {
+    let (aw, bw) = (a.window, b.window);
+    // A's column c is B's column c + off_col, its row r B's row r + off_row.
+    let off_col = aw.i0 - s.du - bw.i0;
+    let off_row = aw.j0 - s.dv - bw.j0;
+    let bcols = |(c0, c1): (usize, usize)| {
+        (c0 as i64 + off_col) as usize..(c1 as i64 + off_col) as usize + 1
+    };
+    // A's columns over B: outside them nothing touches, and an empty pixel of A never does,
+    // so a row's least gap over them is its least over its span.
+    let over = (aw.width > 0)
+        .then(|| clip(Some((0, aw.width - 1)), off_col, bw.width))
+        .flatten();
+    let rows = || {
+        (0..aw.height).filter_map(move |r| {
+            let br = usize::try_from(r as i64 + off_row).ok()?;
+            let cols = over.filter(|_| br < bw.height)?;
+            let gap = min_diff(&a.heights(r)[cols.0..=cols.1], &b.heights(br)[bcols(cols)]);
+            Some((r, br, gap))
+        })
+    };
+    let gap = rows().fold(f32::INFINITY, |m, (_, _, g)| m.min(g));
+    let mut out = ContactSummary::none(gap);
+    if !gap.is_finite() {
+        return out;
+    }
+    let thr = gap + tolerance;
+    out.rows.reserve(aw.height);
+    let mut normals: [Vec<f32>; 3] = Default::default();
+    for (r, br, _) in rows().filter(|&(_, _, g)| g <= thr) {
+        let arow = a.heights(r);
+        let Some((c0, c1)) = clip(lane_span(arow), off_col, bw.width) else {
             continue;
-        }
-        out.count += r.count as u32;
-        out.sum_col += f64::from(r.sum_col);
-        out.sum_row += f64::from(r.count) * p.r as f64;
-        out.sum_height += f64::from(r.sum_height);
-        for (acc, v) in out.sum_normal.iter_mut().zip(r.normal) {
-            *acc += f64::from(v);
-        }
-        out.rows.push((p.r as u32, r.first as u32, r.last as u32));
+        };
+        let (av, bv) = (&arow[c0..=c1], &b.heights(br)[bcols((c0, c1))]);
+        let tris = b.tris(br);
+        // A row in contact has a surface in both images.
+        let flat = whole.flat[a.image_row(r)].or_else(|| flat_row(arow));
+        let uniform = whole.uniform[b.image_row(br)].or_else(|| uniform_normal(tris, b_normals));
+        let sums = match (flat, uniform) {
+            (Some(h), Some(normal)) => {
+                let mut sums = row_sums::<false>(av, bv, [&[]; 3], thr, c0 as f32);
+                sums.sum_height = sums.count * h;
+                sums.normal = normal.map(|c| c * sums.count);
+                sums
+            }
+            _ => {
+                for (k, n) in normals.iter_mut().enumerate() {
+                    n.clear();
+                    let seen = tris[bcols((c0, c1))].iter();
+                    n.extend(seen.map(|&t| b_normals.get(t as usize).map_or(0.0, |n| n[k])));
+                }
+                let nv = normals.each_ref().map(Vec::as_slice);
+                row_sums::<true>(av, bv, nv, thr, c0 as f32)
+            }
+        };
+        add_row(&mut out, r, &sums);
     }
     out
 }
@@ -881,6 +1013,101 @@ mod tests {
                 .expect("one shift");
             assert_eq!(&alone[0], want, "shift {s:?}");
         }
+    }
+
+    #[test]
+    fn a_window_read_in_place_equals_images_made_over_that_window_alone() {
+        // Heights and triangles as functions of the lattice position (as a render gives
+        // them): A a tilted-or-flat bottom with a notch, B a slope whose rows see one, two or
+        // three triangles. Windows of the large images read in place must reduce exactly as
+        // images made over those windows alone do by the many shifts' tables, though a
+        // row's facts (flat, one normal) differ between the large image's row and the
+        // window's.
+        let a_at = |i: i64, j: i64| -> Option<f32> {
+            let (x, y) = (i as f32, j as f32);
+            match (j.rem_euclid(3), x.hypot(y) < 14.0, i == 4 && j > 0) {
+                (_, false, _) | (_, _, true) => None,
+                (0, true, _) => Some(1e-6 * x),
+                _ => Some(0.0),
+            }
+        };
+        let b_at = |i: i64, j: i64| -> Option<(f32, u32)> {
+            let (x, y) = (i as f32, j as f32);
+            let tri = match j.rem_euclid(4) {
+                0 => 0,
+                1 => u32::from(i > 7),
+                2 => u32::from(i > -9) + u32::from(i > 11),
+                _ => 1,
+            };
+            let h = -2e-6 * x - 1e-6 * y - 3e-6 * ((i * j).rem_euclid(3)) as f32;
+            (x.hypot(y) > 3.0).then_some((h, tri))
+        };
+        let image = |window: PixelWindow, surface: Surface| {
+            let mut img = DepthImage::empty(window, 1.0, surface);
+            for r in 0..window.height {
+                for c in 0..window.width {
+                    let (i, j) = (window.i0 + c as i64, window.j0 + r as i64);
+                    let k = r * window.width + c;
+                    let value = match surface {
+                        Surface::Bottom => a_at(i, j).map(|h| (h, 0)),
+                        Surface::Top => b_at(i, j),
+                    };
+                    if let Some((h, t)) = value {
+                        (img.height[k], img.tri[k]) = (h, t);
+                    }
+                }
+            }
+            img
+        };
+        let window = |i0: i64, j0: i64, width: usize, height: usize| PixelWindow {
+            i0,
+            j0,
+            width,
+            height,
+        };
+        let (big_a, big_b) = (
+            image(window(-20, -20, 48, 40), Surface::Bottom),
+            image(window(-40, -40, 90, 80), Surface::Top),
+        );
+        let normals = [[0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [0.0, 0.6, 0.8]];
+        let whole = WholeRows::of(&big_a, &big_b, &normals);
+        let mut touched = 0;
+        for (a_win, s) in [
+            (window(-20, -20, 48, 40), Shift { du: 0, dv: 0 }),
+            (window(-10, -6, 16, 12), Shift { du: 3, dv: -2 }),
+            (window(0, 2, 24, 9), Shift { du: -7, dv: 5 }),
+            (window(-15, -15, 8, 30), Shift { du: 12, dv: 11 }),
+        ] {
+            // B's window: under A's at the shift, and wider.
+            let b_win = window(
+                a_win.i0 - s.du - 3,
+                a_win.j0 - s.dv - 2,
+                a_win.width + 5,
+                a_win.height + 4,
+            );
+            let in_place = contact_in_place(
+                big_a.patch(a_win),
+                big_b.patch(b_win),
+                &whole,
+                &normals,
+                s,
+                1e-4,
+            );
+            // Through the tables of many shifts: the reduction that does not read in place.
+            let next = Shift { du: s.du + 1, ..s };
+            let alone = CpuBackend
+                .contacts(
+                    &image(a_win, Surface::Bottom),
+                    &image(b_win, Surface::Top),
+                    &normals,
+                    &[s, next],
+                    1e-4,
+                )
+                .expect("two shifts");
+            assert_eq!(in_place, alone[0], "window {a_win:?}, shift {s:?}");
+            touched += usize::from(in_place.count > 0);
+        }
+        assert!(touched >= 3, "the windows touch: {touched}");
     }
 
     /// An empty image of B's kind, `width` x `height` pixels at the origin.

@@ -165,37 +165,66 @@ impl DepthImage {
         }
     }
 
-    /// The part of the image within `window`, which it must hold: the same pixels a render
-    /// over `window` gives (a pixel's value depends on its lattice position alone).
-    pub fn crop(&self, window: PixelWindow) -> Self {
+    /// The part of the image within `window`, which it must hold, read in place: the same
+    /// pixels a render over `window` gives (a pixel's value depends on its lattice position
+    /// alone).
+    ///
+    /// # Panics
+    /// When the image does not hold `window`.
+    pub fn patch(&self, window: PixelWindow) -> Patch<'_> {
         let (di, dj) = (window.i0 - self.window.i0, window.j0 - self.window.j0);
         assert!(
             di >= 0
                 && dj >= 0
                 && di as usize + window.width <= self.window.width
                 && dj as usize + window.height <= self.window.height,
-            "crop {window:?} outside {:?}",
+            "patch {window:?} outside {:?}",
             self.window
         );
-        let mut out = Self {
+        Patch {
+            image: self,
             window,
-            pixel: self.pixel,
-            height: Vec::with_capacity(window.len()),
-            tri: Vec::with_capacity(window.len()),
-        };
-        for row in 0..window.height {
-            let start = (dj as usize + row) * self.window.width + di as usize;
-            out.height
-                .extend_from_slice(&self.height[start..start + window.width]);
-            out.tri
-                .extend_from_slice(&self.tri[start..start + window.width]);
+            start: dj as usize * self.window.width + di as usize,
         }
-        out
+    }
+
+    /// The whole image as a [`Patch`].
+    pub fn whole(&self) -> Patch<'_> {
+        self.patch(self.window)
     }
 
     /// Number of pixels with a surface.
     pub fn covered(&self) -> usize {
         self.height.iter().filter(|h| h.is_finite()).count()
+    }
+}
+
+/// A window of a [`DepthImage`], read in place ([`DepthImage::patch`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Patch<'a> {
+    image: &'a DepthImage,
+    /// Where it lies on the lattice.
+    pub window: PixelWindow,
+    /// Index in the image of the window's first pixel.
+    start: usize,
+}
+
+impl<'a> Patch<'a> {
+    /// The image's row that is row `r` of the window.
+    pub fn image_row(&self, r: usize) -> usize {
+        self.start / self.image.window.width + r
+    }
+
+    /// Heights of row `r` of the window.
+    pub fn heights(&self, r: usize) -> &'a [f32] {
+        let k = self.start + r * self.image.window.width;
+        &self.image.height[k..k + self.window.width]
+    }
+
+    /// Triangles seen along row `r` of the window.
+    pub fn tris(&self, r: usize) -> &'a [u32] {
+        let k = self.start + r * self.image.window.width;
+        &self.image.tri[k..k + self.window.width]
     }
 }
 
