@@ -327,10 +327,12 @@ impl<'a> Parts<'a> {
     /// along w against B at `b_pose`: the rays along w where the gap is within the contact
     /// tolerance of touching, first at about the pixel over all of A; where their centroid
     /// is not fine enough (few rays, or many on the region's edge: a crescent, a strip a
-    /// few rays wide), again finer over the region itself, grown from them ray by ray (a
-    /// thin crescent's centroid moves with its sampling, and its tips may be thinner than
-    /// the first rays' pitch). Where no first ray touches, from the rim contact's seeds
-    /// ([`Rays::rim_seeds`]; `slope`, the tangent of B's tilt against A).
+    /// few rays wide), again finer over the region itself, grown ray by ray from them, from
+    /// every first ray within a slack of touching and from the closest points ([`Seeds`];
+    /// `slope`, the tangent of B's tilt against A): a thin crescent's centroid moves with
+    /// its sampling, its tips may be thinner than the first rays' pitch, and a face tilted
+    /// against another may rest on its rim at two places micrometres apart in height,
+    /// slivers narrower than the pitch that the first rays may touch at one place or none.
     fn region(
         &self,
         view: &View,
@@ -357,22 +359,33 @@ impl<'a> Parts<'a> {
             .max(((hi[0] - lo[0]) * (hi[1] - lo[1]) / MAX_RAYS).sqrt());
         let tolerance = self.task.depth.tolerance;
         let lattice = Lattice::new(pitch, &mut phase);
-        let coarse = rays.scan(&lattice, tolerance);
-        let found = match &coarse {
-            Some(c) => {
-                let error = c.sampling_error();
-                if error < SAMPLING_SHARE * self.task.depth.pixel {
-                    return Some(c.mean());
-                }
-                rays.refine(&c.hits, pitch, error, &mut phase)
+        // A pitch of the tilt's slope more than the tolerance widens a sliver to about a
+        // pitch: every place where the parts rest has a first ray within it.
+        let near = rays.scan(&lattice, tolerance + pitch * slope);
+        let touching: BTreeMap<[i64; 2], f64> = (near.iter())
+            .filter(|(_, (_, gap))| *gap <= tolerance)
+            .map(|(&k, &(h, _))| (k, h))
+            .collect();
+        let coarse = (!touching.is_empty()).then(|| Scan::of(&touching, &lattice));
+        let error = match &coarse {
+            Some(c) if c.sampling_error() < SAMPLING_SHARE * self.task.depth.pixel => {
+                return Some(c.mean());
             }
-            // A face tilted against another rests on its rim, where the region within the
-            // tolerance is a sliver narrower than the pitch.
-            None => {
-                let seeds = rays.rim_seeds(&lattice, tolerance + pitch * slope);
-                rays.refine(&seeds, pitch, pitch, &mut phase)
-            }
+            Some(c) => c.sampling_error(),
+            None => pitch,
         };
+        let seeds = Seeds {
+            // The closest points where no first ray touches: a rim's sliver.
+            inside: (touching.keys().map(|&k| lattice.at(k)))
+                .chain(touching.is_empty().then(|| rays.closest()).flatten())
+                .collect(),
+            near: (near.iter())
+                .filter(|(_, (_, gap))| *gap > tolerance)
+                .map(|(&k, _)| lattice.at(k))
+                .collect(),
+            radius: pitch,
+        };
+        let found = rays.refine(seeds, pitch, error, &mut phase);
         // No ray of a finer lattice near the first ones touches: nothing finer to say.
         found.or(coarse).map(|s| s.mean())
     }
@@ -430,6 +443,8 @@ struct Scan {
     hits: Vec<([f64; 2], f64)>,
     /// Contact rays with a neighbour on the lattice that is not one.
     edge: usize,
+    /// The lattice's pitch (m).
+    pitch: f64,
 }
 
 impl Scan {
@@ -440,14 +455,15 @@ impl Scan {
 
     /// An estimate of the error of the rays' centroid (m): each ray on the region's edge in
     /// or out by chance (a variance p (1 - p) of 1/6 on average over where the edge cuts
-    /// its cell), at up to the region's extent from the centroid.
+    /// its cell), at up to the region's extent from the centroid, and at least a pitch (a
+    /// region of one ray, or a row of them, may reach a pitch beyond its rays).
     fn sampling_error(&self) -> f64 {
         let ([u, v], _) = self.mean();
         let extent = self
             .hits
             .iter()
             .map(|([x, y], _)| (x - u).hypot(y - v))
-            .fold(0.0, f64::max);
+            .fold(self.pitch, f64::max);
         (self.edge as f64 / 6.0).sqrt() * extent / self.rays() as f64
     }
 
@@ -462,15 +478,36 @@ impl Scan {
     }
 }
 
+/// Where a finer search of the contact region starts.
+struct Seeds {
+    /// Points in the region.
+    inside: Vec<[f64; 2]>,
+    /// Points near it: the region may lie anywhere within `radius` of them.
+    near: Vec<[f64; 2]>,
+    /// How far from a point near the region the search starts (m).
+    radius: f64,
+}
+
+impl Seeds {
+    /// The contact rays of a search.
+    fn inside(scan: &Scan) -> Self {
+        Self {
+            inside: scan.hits.iter().map(|&(p, _)| p).collect(),
+            near: Vec::new(),
+            radius: 0.0,
+        }
+    }
+}
+
 /// The four lattice neighbours of (i, j).
 fn neighbours([i, j]: [i64; 2]) -> [[i64; 2]; 4] {
     [[i - 1, j], [i + 1, j], [i, j - 1], [i, j + 1]]
 }
 
 impl Rays<'_> {
-    /// A's height along w at (u, v) when the ray there meets both parts with a gap within
-    /// `tolerance`.
-    fn height_at(&self, [u, v]: [f64; 2], tolerance: f64) -> Option<f64> {
+    /// A's height along w at (u, v) and the gap there, when the ray there meets both parts
+    /// with a gap within `slack`.
+    fn gap_at(&self, [u, v]: [f64; 2], slack: f64) -> Option<(f64, f64)> {
         let [lo, hi] = self.bounds;
         if u < lo[0] || u > hi[0] || v < lo[1] || v > hi[1] {
             return None;
@@ -494,11 +531,12 @@ impl Rays<'_> {
         )?;
         let h_a = a_range[0] - MARGIN + ta + self.rise;
         let h_b = b_range[1] + MARGIN - tb;
-        (h_a - h_b <= tolerance).then_some(h_a)
+        (h_a - h_b <= slack).then_some((h_a, h_a - h_b))
     }
 
-    /// The rays of `lattice` over A's box with a gap within `tolerance`; `None` when none.
-    fn scan(&self, lattice: &Lattice, tolerance: f64) -> Option<Scan> {
+    /// The rays of `lattice` over A's box with a gap within `slack`: A's height and the
+    /// gap at each.
+    fn scan(&self, lattice: &Lattice, slack: f64) -> BTreeMap<[i64; 2], (f64, f64)> {
         let [lo, hi] = self.bounds;
         let corners = [lo, [hi[0], lo[1]], [lo[0], hi[1]], hi].map(|c| lattice.nearest(c));
         let range = |k: usize| {
@@ -510,32 +548,41 @@ impl Rays<'_> {
         let mut hit = BTreeMap::new();
         for i in range(0) {
             for j in range(1) {
-                if let Some(h) = self.height_at(lattice.at([i, j]), tolerance) {
-                    hit.insert([i, j], h);
+                if let Some(found) = self.gap_at(lattice.at([i, j]), slack) {
+                    hit.insert([i, j], found);
                 }
             }
         }
-        let found = Scan::of(&hit, lattice);
-        (found.rays() > 0).then_some(found)
+        hit
     }
 
-    /// The contact rays of `lattice` reached from those nearest `seeds` through rays no more
+    /// The contact rays of `lattice` reached from `seeds` (those nearest its points inside
+    /// the region, and those within its radius of its points near it) through rays no more
     /// than [`REACH`] apart (none when none touches); `None` when more than
     /// [`MAX_FINE_RAYS`] rays would be cast.
-    fn flood(&self, lattice: &Lattice, seeds: &[([f64; 2], f64)]) -> Option<Scan> {
+    fn flood(&self, lattice: &Lattice, seeds: &Seeds) -> Option<Scan> {
         // Each ray cast: A's height where it touches, and the fewest misses in a row on a
-        // path that reached it from a touching one.
+        // path that reached it from a touching one (a ray about a point near the region
+        // starts at the most: a miss there leads nowhere).
         let mut seen: BTreeMap<[i64; 2], (Option<f64>, u32)> = BTreeMap::new();
-        let mut todo: Vec<([i64; 2], u32)> = seeds
-            .iter()
-            .map(|(p, _)| (lattice.nearest(*p), 0))
+        let steps = (seeds.radius / lattice.pitch).floor() as i64;
+        let about = |p: &[f64; 2]| {
+            let [i, j] = lattice.nearest(*p);
+            (-steps..=steps).flat_map(move |di| (-steps..=steps).map(move |dj| [i + di, j + dj]))
+        };
+        let mut todo: Vec<([i64; 2], u32)> = (seeds.inside.iter())
+            .map(|p| (lattice.nearest(*p), 0))
+            .chain(seeds.near.iter().flat_map(about).map(|k| (k, REACH)))
             .collect();
         while let Some((k, misses)) = todo.pop() {
             let touch = match seen.get(&k) {
                 Some(&(_, fewest)) if fewest <= misses => continue,
                 Some(&(touch, _)) => touch,
                 None if seen.len() as f64 >= MAX_FINE_RAYS => return None,
-                None => self.height_at(lattice.at(k), self.parts.task.depth.tolerance),
+                None => {
+                    let tolerance = self.parts.task.depth.tolerance;
+                    self.gap_at(lattice.at(k), tolerance).map(|(h, _)| h)
+                }
             };
             let misses = if touch.is_some() { 0 } else { misses + 1 };
             seen.insert(k, (touch, misses));
@@ -550,28 +597,20 @@ impl Rays<'_> {
         Some(Scan::of(&hit, lattice))
     }
 
-    /// Where to look for a rim's contact that no ray of `lattice` meets within the contact
-    /// tolerance: the point where the exact geometry puts the parts closest (A risen a
-    /// tolerance more), and the rays of `lattice` within `slack` (the tolerance plus a
-    /// pitch of the tilt's slope, which widens a second point contact's sliver to about a
-    /// pitch). Seeds only: their heights are not contact heights.
-    fn rim_seeds(&self, lattice: &Lattice, slack: f64) -> Vec<([f64; 2], f64)> {
+    /// Where the exact geometry puts the parts closest (A risen a tolerance more): a point
+    /// of the contact region, though no ray of a lattice may meet it within the tolerance
+    /// (a rim's sliver).
+    fn closest(&self) -> Option<[f64; 2]> {
         let pair = &self.parts.pair;
         let tolerance = self.parts.task.depth.tolerance;
         let lifted = Isometry3::from(Translation3::from(self.view.w * (self.rise + tolerance)));
-        let closest =
-            query::closest_points(&lifted, &pair.a, self.b_pose, &pair.b, 2.0 * tolerance);
-        let mut hits = match closest {
+        match query::closest_points(&lifted, &pair.a, self.b_pose, &pair.b, 2.0 * tolerance) {
             Ok(ClosestPoints::WithinMargin(on_a, _)) => {
                 let [u, v, _] = self.view.project(&on_a);
-                vec![([u, v], 0.0)]
+                Some([u, v])
             }
-            _ => Vec::new(),
-        };
-        if let Some(near) = self.scan(lattice, slack) {
-            hits.extend(near.hits);
+            _ => None,
         }
-        hits
     }
 
     /// The contact region grown from `seeds` (found on a lattice of `pitch`, their
@@ -584,18 +623,18 @@ impl Rays<'_> {
     /// finer lattice's ray touches.
     fn refine(
         &self,
-        seeds: &[([f64; 2], f64)],
+        seeds: Seeds,
         pitch: f64,
         mut error: f64,
         phase: &mut Xoshiro256PlusPlus,
     ) -> Option<Scan> {
         let target = 0.5 * SAMPLING_SHARE * self.parts.task.depth.pixel;
         let (mut best, mut fine): (Option<Scan>, f64) = (None, pitch);
+        let mut from = seeds;
         for _ in 0..SEARCHES {
             let mut next = fine * (target / error).powf(2.0 / 3.0).min(1.0 / REFINE);
-            let from = best.as_ref().map_or(seeds, |b| &b.hits);
             let found = loop {
-                match self.flood(&Lattice::new(next, phase), from) {
+                match self.flood(&Lattice::new(next, phase), &from) {
                     Some(found) => break found,
                     None if best.is_none() => next *= 2.0,
                     None => return best,
@@ -606,6 +645,7 @@ impl Rays<'_> {
             }
             error = found.sampling_error();
             fine = next;
+            from = Seeds::inside(&found);
             best = Some(found);
             if error < target {
                 break;
@@ -619,6 +659,7 @@ impl Scan {
     /// The scan of the contact rays `hit` (lattice point: A's height) of `lattice`.
     fn of(hit: &BTreeMap<[i64; 2], f64>, lattice: &Lattice) -> Scan {
         Scan {
+            pitch: lattice.pitch,
             hits: hit.iter().map(|(&k, &h)| (lattice.at(k), h)).collect(),
             edge: hit
                 .keys()
