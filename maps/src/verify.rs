@@ -72,11 +72,12 @@ pub struct CellCheck {
     /// samples the face that rests on an edge up to a pixel from that edge.
     pub sampling: f64,
     /// Distance across the approach from the map's lever point to the exact contact
-    /// region's centroid (m): infinite where no ray along the approach sees the contact;
+    /// region's centroid (m; where no ray along the approach meets the region, the point
+    /// where parry puts the parts closest): infinite where neither finds the contact;
     /// `None` where the map's model does not put the lever at the centroid.
     pub centroid_error: Option<f64>,
     /// The exact contact region's centroid across the approach (m; part A's view of
-    /// [`View::along`] its approach), where a ray along the approach sees the region.
+    /// [`View::along`] its approach), or the closest points' where no ray meets it.
     pub centroid: Option<[f64; 2]>,
 }
 
@@ -275,9 +276,9 @@ impl<'a> Parts<'a> {
         let tilt = (r2 * approach).angle(&approach);
         let values = map.cell(cell);
         let depth_error = f64::from(values[NCH - 1]) - (t_obj.dot(&view.w) + rise);
-        // A contact that no ray along the approach sees (an edge on a wall) is one the
-        // z-buffer cannot see either: the map's lever point is nowhere near it. A face
-        // tilted against another is searched for where it rests on its rim.
+        // A contact that no ray along the approach meets (an edge on a wall) is a point,
+        // where parry's closest points put it. A face tilted against another is searched
+        // for where it rests on its rim.
         let region = self
             .centroid
             .then(|| {
@@ -374,10 +375,11 @@ impl<'a> Parts<'a> {
             Some(c) => c.sampling_error(),
             None => pitch,
         };
+        let closest = touching.is_empty().then(|| rays.closest()).flatten();
         let seeds = Seeds {
             // The closest points where no first ray touches: a rim's sliver.
             inside: (touching.keys().map(|&k| lattice.at(k)))
-                .chain(touching.is_empty().then(|| rays.closest()).flatten())
+                .chain(closest.map(|(p, _)| p))
                 .collect(),
             near: (near.iter())
                 .filter(|(_, (_, gap))| *gap > tolerance)
@@ -386,8 +388,10 @@ impl<'a> Parts<'a> {
             radius: pitch,
         };
         let found = rays.refine(seeds, pitch, error, &mut phase);
-        // No ray of a finer lattice near the first ones touches: nothing finer to say.
-        found.or(coarse).map(|s| s.mean())
+        // No ray of a finer lattice near the first ones touches: nothing finer to say; and
+        // where no ray touches at all, the parts touch at a point no ray along the approach
+        // meets within the tolerance (an edge on a wall): the closest points stand for it.
+        (found.or(coarse).map(|s| s.mean())).or(closest)
     }
 }
 
@@ -599,15 +603,15 @@ impl Rays<'_> {
 
     /// Where the exact geometry puts the parts closest (A risen a tolerance more): a point
     /// of the contact region, though no ray of a lattice may meet it within the tolerance
-    /// (a rim's sliver).
-    fn closest(&self) -> Option<[f64; 2]> {
+    /// (a rim's sliver, an edge on a wall), and A's height along w there.
+    fn closest(&self) -> Option<([f64; 2], f64)> {
         let pair = &self.parts.pair;
         let tolerance = self.parts.task.depth.tolerance;
         let lifted = Isometry3::from(Translation3::from(self.view.w * (self.rise + tolerance)));
         match query::closest_points(&lifted, &pair.a, self.b_pose, &pair.b, 2.0 * tolerance) {
             Ok(ClosestPoints::WithinMargin(on_a, _)) => {
-                let [u, v, _] = self.view.project(&on_a);
-                Some([u, v])
+                let [u, v, h] = self.view.project(&on_a);
+                Some(([u, v], h - tolerance))
             }
             _ => None,
         }

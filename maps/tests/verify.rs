@@ -293,7 +293,7 @@ fn z_buffer_centroid(
 }
 
 #[test]
-fn a_tilted_face_s_sliver_is_found_where_a_finer_z_buffer_puts_it() {
+fn a_tilted_face_s_sliver_and_an_edge_on_a_wall_are_found_where_they_are() {
     // Part B tilted by 1-2 degrees, part A resting on a sliver of B's top beside the hole,
     // 0.05-0.1 mm wide and narrower than the first rays' pitch: one of them, or none,
     // touches it. The verifier must search it finer, not take one ray for the region (it
@@ -316,5 +316,27 @@ fn a_tilted_face_s_sliver_is_found_where_a_finer_z_buffer_puts_it() {
         let fine = z_buffer_centroid(&task, [&a, &b], map.grid(), &map.grid().coords(cell), 5e-6);
         let miss = (exact[0] - fine[0]).hypot(exact[1] - fine[1]);
         assert!(miss < 1e-5, "{coords:?}: {exact:?} against {fine:?}");
+    }
+    // Part A's edge in the tilted hole, on its wall: no ray along the approach meets the
+    // contact, a point on the rim of part A's flat face (the peg's radius from its mesh).
+    let rim = a
+        .vertices
+        .iter()
+        .map(|p| p.x.hypot(p.y))
+        .fold(0.0, f64::max);
+    for coords in [
+        [0.0010, 0.0005, deg(0.75), deg(-1.75)],
+        [0.0007, -0.0010, deg(-0.25), deg(-0.75)],
+    ] {
+        let cell = map.grid().nearest(&coords).expect("in the grid");
+        let check = verify_cells(&map, &task, [&a, &b], &[cell], 1).expect("verifiable");
+        let [u, v] = check.checks[0]
+            .centroid
+            .expect("the closest points find it");
+        assert!(
+            (u.hypot(v) - rim).abs() < 1e-5,
+            "{coords:?}: ({u}, {v}), {} m from the axis against the rim's {rim}",
+            u.hypot(v)
+        );
     }
 }

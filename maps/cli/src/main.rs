@@ -409,7 +409,7 @@ fn cmd_verify(
             match c.centroid_error {
                 None => "-".into(),
                 Some(e) if e.is_infinite() =>
-                    "none: no ray along the approach sees the contact".into(),
+                    "none: neither the rays along the approach nor the closest points find the contact".into(),
                 Some(e) => format!("{:.2} um", e * 1e6),
             }
         );
