@@ -828,7 +828,7 @@ pub fn contact_in_place(
     s: Shift,
     tolerance: f32,
 ) -> ContactSummary {
-    let (aw, bw) = (a.window, b.window);
+    let (aw, bw) = (a.window(), b.window());
     // A's column c is B's column c + off_col, its row r B's row r + off_row.
     let off_col = aw.i0 - s.du - bw.i0;
     let off_row = aw.j0 - s.dv - bw.j0;

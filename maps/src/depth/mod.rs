@@ -204,12 +204,17 @@ impl DepthImage {
 pub struct Patch<'a> {
     image: &'a DepthImage,
     /// Where it lies on the lattice.
-    pub window: PixelWindow,
+    window: PixelWindow,
     /// Index in the image of the window's first pixel.
     start: usize,
 }
 
 impl<'a> Patch<'a> {
+    /// Where it lies on the lattice.
+    pub fn window(&self) -> PixelWindow {
+        self.window
+    }
+
     /// The image's row that is row `r` of the window.
     pub fn image_row(&self, r: usize) -> usize {
         self.start / self.image.window.width + r
