@@ -795,7 +795,7 @@ fn add_row(out: &mut ContactSummary, r: usize, sums: &RowSums) {
 /// What holds of whole rows of two images, A's and B's, and so of their rows in any window
 /// ([`contact_in_place`]): a row of A flat as a whole is flat, at its height, wherever A has
 /// a surface in it; a row of B whose pixels share one normal shares it wherever B has one.
-pub struct WholeRows {
+pub(crate) struct WholeRows {
     /// Per row of A, its height when all its pixels with a surface share one.
     flat: Vec<Option<f32>>,
     /// Per row of B, the normal all its pixels share, if they share one.
@@ -804,7 +804,7 @@ pub struct WholeRows {
 
 impl WholeRows {
     /// The rows of `a` and of `b` (normals `b_normals`).
-    pub fn of(a: &DepthImage, b: &DepthImage, b_normals: &[[f32; 3]]) -> Self {
+    pub(crate) fn of(a: &DepthImage, b: &DepthImage, b_normals: &[[f32; 3]]) -> Self {
         let w = b.window.width;
         Self {
             flat: flat_rows(a),
@@ -820,7 +820,7 @@ impl WholeRows {
 /// gap and then the rows in contact alone (`whole`: what holds of the images' whole rows).
 /// A thin contact region computed again at a finer pixel is one such window of the finer
 /// images.
-pub fn contact_in_place(
+pub(crate) fn contact_in_place(
     a: Patch<'_>,
     b: Patch<'_>,
     whole: &WholeRows,
