@@ -368,13 +368,13 @@ impl<'a> Parts<'a> {
             .map(|(&k, &(h, _))| (k, h))
             .collect();
         let coarse = (!touching.is_empty()).then(|| Scan::of(&touching, &lattice));
-        let error = match &coarse {
-            Some(c) if c.sampling_error() < SAMPLING_SHARE * self.task.depth.pixel => {
-                return Some(c.mean());
-            }
-            Some(c) => c.sampling_error(),
-            None => pitch,
-        };
+        let error = coarse.as_ref().map_or(pitch, Scan::sampling_error);
+        if let Some(c) = coarse
+            .as_ref()
+            .filter(|_| error < SAMPLING_SHARE * self.task.depth.pixel)
+        {
+            return Some(c.mean());
+        }
         let closest = touching.is_empty().then(|| rays.closest()).flatten();
         let seeds = Seeds {
             // The closest points where no first ray touches: a rim's sliver.

@@ -117,7 +117,7 @@ impl DepthBackend for CpuBackend {
         }
         let rows = Rows {
             spans: RowSpans::of(a),
-            flat: flat_rows(a),
+            whole: WholeRows::of(a, b, b_normals),
             solid: solid_rows(a),
             normals: Normals::of(b, b_normals),
             runs: Runs::of(b),
@@ -397,8 +397,7 @@ fn run_sums(h: f32, b: &[f32], ends: &[u32], bcol: usize, thr: f32, col0: usize)
     }
 }
 
-/// B's contact normals: per row the normal shared by all its pixels, if they share one,
-/// and per pixel, built where a row's pixels are summed one by one.
+/// B's contact normals per pixel, built where a row's pixels are summed one by one.
 struct Normals<'b> {
     /// B's triangle per pixel.
     tri: &'b [u32],
@@ -406,20 +405,14 @@ struct Normals<'b> {
     bn: &'b [[f32; 3]],
     /// B's normal per pixel, one image per component (zero where B has no surface).
     comp: OnceLock<[Vec<f32>; 3]>,
-    row_uniform: Vec<Option<[f32; 3]>>,
 }
 
 impl<'b> Normals<'b> {
     fn of(b: &'b DepthImage, bn: &'b [[f32; 3]]) -> Self {
-        let w = b.window.width;
-        let row_uniform = (0..b.window.height)
-            .map(|r| uniform_normal(&b.tri[r * w..(r + 1) * w], bn))
-            .collect();
         Self {
             tri: &b.tri,
             bn,
             comp: OnceLock::new(),
-            row_uniform,
         }
     }
 
@@ -579,7 +572,8 @@ impl RowRanges {
 /// What the contact reduction precomputes once per image pair.
 struct Rows<'b> {
     spans: RowSpans,
-    flat: Vec<Option<f32>>,
+    /// A's flat rows and B's rows of one normal.
+    whole: WholeRows,
     solid: Vec<Option<Solid>>,
     normals: Normals<'b>,
     /// B's runs.
@@ -735,7 +729,7 @@ fn summarize(
         let (av, bv) = (&a.height[p.r * w + p.c0..][..n], &b.height[bs..bs + n]);
         let nv = || rows.normals.comp().each_ref().map(|c| &c[bs..bs + n]);
         let brow = bs / bw;
-        let uniform = (rows.flat[p.r], rows.normals.row_uniform[brow]);
+        let uniform = (rows.whole.flat[p.r], rows.whole.uniform[brow]);
         let r = match (uniform, rows.solid[p.r]) {
             ((Some(h), Some(normal)), Some(sd)) if whole[r] <= thr => {
                 // The whole run touches: its sums in closed form (whole numbers, exact in
@@ -840,23 +834,25 @@ pub(crate) fn contact_in_place(
     let over = (aw.width > 0)
         .then(|| clip(Some((0, aw.width - 1)), off_col, bw.width))
         .flatten();
-    let rows = || {
-        (0..aw.height).filter_map(move |r| {
+    // Each row of A over B: its row of B and its least gap.
+    let rows: Vec<(usize, usize, f32)> = (0..aw.height)
+        .filter_map(|r| {
             let br = usize::try_from(r as i64 + off_row).ok()?;
             let cols = over.filter(|_| br < bw.height)?;
             let gap = min_diff(&a.heights(r)[cols.0..=cols.1], &b.heights(br)[bcols(cols)]);
             Some((r, br, gap))
         })
-    };
-    let gap = rows().fold(f32::INFINITY, |m, (_, _, g)| m.min(g));
+        .collect();
+    let gap = rows.iter().fold(f32::INFINITY, |m, &(_, _, g)| m.min(g));
     let mut out = ContactSummary::none(gap);
     if !gap.is_finite() {
         return out;
     }
     let thr = gap + tolerance;
-    out.rows.reserve(aw.height);
+    let touching = || rows.iter().filter(|&&(_, _, g)| g <= thr);
+    out.rows.reserve(touching().count());
     let mut normals: [Vec<f32>; 3] = Default::default();
-    for (r, br, _) in rows().filter(|&(_, _, g)| g <= thr) {
+    for &(r, br, _) in touching() {
         let arow = a.heights(r);
         let Some((c0, c1)) = clip(lane_span(arow), off_col, bw.width) else {
             continue;
