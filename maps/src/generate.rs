@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 
-use crate::depth::cpu::{CpuBackend, WholeRows, contact_in_place};
+use crate::depth::cpu::{CpuBackend, InPlace, WholeRows, contact_in_place};
 use crate::depth::{
     ContactSummary, DepthBackend, DepthImage, PixelWindow, RenderJob, Shift, Surface, View,
 };
@@ -391,12 +391,15 @@ impl Context<'_> {
         let mut contacts: Vec<(ContactSummary, WrenchSetup)> =
             summaries.into_iter().map(|c| (c, setup)).collect();
         if let Some(fine) = &fine {
-            (contacts.par_iter_mut().zip(&shifts).zip(&windows)).for_each(|((slot, shift), w)| {
-                if let Some(w) = w {
-                    let c = std::mem::replace(&mut slot.0, ContactSummary::none(0.0));
-                    *slot = fine.contact(c, *shift, w, &setup, &b_normals);
-                }
-            });
+            (contacts.par_iter_mut().zip(&shifts).zip(&windows)).for_each_init(
+                InPlace::default,
+                |scratch, ((slot, shift), w)| {
+                    if let Some(w) = w {
+                        let c = std::mem::replace(&mut slot.0, ContactSummary::none(0.0));
+                        *slot = fine.contact(c, *shift, w, &setup, &b_normals, scratch);
+                    }
+                },
+            );
         }
         let s0 = Point3::from(self.task.contact.sensor_origin);
         let mut out = vec![(0, [0.0; NCH]); cells.len()];
@@ -550,6 +553,7 @@ impl<'a> Fine<'a> {
         windows: &[PixelWindow; 2],
         coarse: &WrenchSetup,
         b_normals: &[[f32; 3]],
+        scratch: &mut InPlace,
     ) -> (ContactSummary, WrenchSetup) {
         let [a_win, b_win] = *windows;
         let shift = Shift {
@@ -572,6 +576,7 @@ impl<'a> Fine<'a> {
             b_normals,
             shift,
             tolerance,
+            scratch,
         );
         if fine.count > 0 {
             (fine, setup)

@@ -113,6 +113,7 @@ impl DepthBackend for CpuBackend {
                 b_normals,
                 *s,
                 tolerance,
+                &mut InPlace::default(),
             )]);
         }
         let rows = Rows {
@@ -809,6 +810,16 @@ impl WholeRows {
     }
 }
 
+/// What [`contact_in_place`] reuses from one call to the next (one per thread): millions
+/// of small regions a map, each of which would otherwise allocate and grow its own.
+#[derive(Default)]
+pub(crate) struct InPlace {
+    /// Each row of A over B: its row, B's row under it and its least gap.
+    rows: Vec<(usize, usize, f32)>,
+    /// B's normals along a row in contact, per component (u, v, w).
+    normals: [Vec<f32>; 3],
+}
+
 /// The contact summary of `a` against `b` (normals `b_normals`) under the one shift `s`,
 /// read in place: exactly what [`CpuBackend::contacts`] gives for it, from each row's least
 /// gap and then the rows in contact alone (`whole`: what holds of the images' whole rows).
@@ -821,6 +832,7 @@ pub(crate) fn contact_in_place(
     b_normals: &[[f32; 3]],
     s: Shift,
     tolerance: f32,
+    scratch: &mut InPlace,
 ) -> ContactSummary {
     let (aw, bw) = (a.window(), b.window());
     // A's column c is B's column c + off_col, its row r B's row r + off_row.
@@ -835,14 +847,14 @@ pub(crate) fn contact_in_place(
         .then(|| clip(Some((0, aw.width - 1)), off_col, bw.width))
         .flatten();
     // Each row of A over B: its row of B and its least gap.
-    let rows: Vec<(usize, usize, f32)> = (0..aw.height)
-        .filter_map(|r| {
-            let br = usize::try_from(r as i64 + off_row).ok()?;
-            let cols = over.filter(|_| br < bw.height)?;
-            let gap = min_diff(&a.heights(r)[cols.0..=cols.1], &b.heights(br)[bcols(cols)]);
-            Some((r, br, gap))
-        })
-        .collect();
+    let InPlace { rows, normals } = scratch;
+    rows.clear();
+    rows.extend((0..aw.height).filter_map(|r| {
+        let br = usize::try_from(r as i64 + off_row).ok()?;
+        let cols = over.filter(|_| br < bw.height)?;
+        let gap = min_diff(&a.heights(r)[cols.0..=cols.1], &b.heights(br)[bcols(cols)]);
+        Some((r, br, gap))
+    }));
     let gap = rows.iter().fold(f32::INFINITY, |m, &(_, _, g)| m.min(g));
     let mut out = ContactSummary::none(gap);
     if !gap.is_finite() {
@@ -850,8 +862,7 @@ pub(crate) fn contact_in_place(
     }
     let thr = gap + tolerance;
     let touching = || rows.iter().filter(|&&(_, _, g)| g <= thr);
-    out.rows.reserve(touching().count());
-    let mut normals: [Vec<f32>; 3] = Default::default();
+    out.rows.reserve_exact(touching().count());
     for &(r, br, _) in touching() {
         let arow = a.heights(r);
         let Some((c0, c1)) = clip(lane_span(arow), off_col, bw.width) else {
@@ -1088,6 +1099,7 @@ mod tests {
                 &normals,
                 s,
                 1e-4,
+                &mut InPlace::default(),
             );
             // Through the tables of many shifts: the reduction that does not read in place.
             let next = Shift { du: s.du + 1, ..s };
