@@ -238,24 +238,24 @@ pub fn generate_with(
         mesh_b,
         model: opts.model,
     };
-    // Rotation cells a few at a time on every core: a cell's renders are serial, and its
-    // contacts parallel; together they keep every core busy, with few cells' results held.
+    // Rotation cells on every core, each written into the map as soon as it is done: a
+    // cell's renders are serial and its contacts parallel, so that together they keep every
+    // core busy, and only the cells in progress are held.
     let rot_cells: Vec<usize> = (0..render_axes.len)
         .filter(|r| r % shard_n == shard_i)
         .collect();
-    for batch in rot_cells.chunks(2 * rayon::current_num_threads()) {
-        let results = batch
-            .par_iter()
-            .map(|&rot_cell| {
-                let mut idx = [0usize; MAX_AXES];
-                render_axes.fill(rot_cell, &mut idx);
-                ctx.rotation_cell(&idx, &other_axes, progress)
-            })
-            .collect::<Result<Vec<_>>>()?;
-        for (cell, values) in results.into_iter().flatten() {
+    let done = std::sync::Mutex::new(&mut map);
+    rot_cells.par_iter().try_for_each(|&rot_cell| {
+        let mut idx = [0usize; MAX_AXES];
+        render_axes.fill(rot_cell, &mut idx);
+        let values = ctx.rotation_cell(&idx, &other_axes, progress)?;
+        // Poisoned only by another cell's panic, which rayon passes on.
+        let mut map = done.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        for (cell, values) in values {
             *map.cell_mut(cell) = values;
         }
-    }
+        Ok(())
+    })?;
     Ok(map)
 }
 
