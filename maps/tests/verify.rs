@@ -22,10 +22,10 @@ fn computed(name: &str) -> (Task, FtMap, [Mesh; 2]) {
 #[test]
 fn every_task_s_map_holds_the_exact_contact_height_and_mostly_its_centroid() {
     // Measured on 1000 cells each (docs/RESULTS.md): depth exact to 0.01 um on every map of
-    // translations; the lever point within a pixel of the exact centroid in 99.1-100 % of
-    // the cells where the parts stay level (the octagon's strips a pixel or two wide along
-    // some flats beside wider ones are under-resolved: 99.4 % of its cells by the closed
-    // form), so the bound here is below the 99.9 %. On peg_in_hole_4dof's tilts
+    // translations; the lever point within a pixel of the exact centroid in 99.9-100 % of
+    // the cells where the parts stay level (map revision 9; 99.4 % on the octagon before its
+    // strips a few pixels wide along some flats beside wider ones were refined); 20 cells
+    // cannot tell 99.9 % from 95 %. On peg_in_hole_4dof's tilts
     // at 0.25 degrees, 98.8 % of 1000 cells (map revision 8): a contact on a wall is not
     // seen along the approach at all, and a band narrower than the finer pixel is sampled
     // by a few of its pixels.

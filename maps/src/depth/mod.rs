@@ -305,6 +305,36 @@ impl ContactSummary {
             0.0
         }
     }
+
+    /// The region's pixels on an edge across its rows, as a share of its pixel count: those
+    /// of rows at most three pixels long, and those not between the spans of the rows just
+    /// above and below. A strip up to three pixels wide across the rows, or two along them,
+    /// has all of its pixels there (sampled by a pixel more or less at its edges: the
+    /// inclusive edge rule puts a strip 2 pixels wide whose edges lie on pixel centres at
+    /// 3), a square 10 pixels across a fifth of them, a disc of radius r about 4 / (pi r). Only each row's first and last pixel are known, so pieces side by
+    /// side in the same rows count as one span.
+    pub fn edge_share(&self) -> f64 {
+        let rows = &self.rows;
+        let edge: u64 = (0..rows.len())
+            .map(|k| {
+                let (row, first, last) = rows[k];
+                let len = u64::from(last - first + 1);
+                // The span of the row `k` + `d` of the list where it is the next row.
+                let beside = |d: isize| {
+                    let &(r, f, l) = rows.get(k.checked_add_signed(d)?)?;
+                    (r.abs_diff(row) == 1).then_some((f, l))
+                };
+                match (beside(-1), beside(1)) {
+                    (Some((f0, l0)), Some((f1, l1))) if len > 3 => {
+                        let (f, l) = (first.max(f0).max(f1), last.min(l0).min(l1));
+                        len - if l >= f { u64::from(l - f + 1) } else { 0 }
+                    }
+                    _ => len,
+                }
+            })
+            .sum();
+        edge as f64 / f64::from(self.count.max(1))
+    }
 }
 
 /// Renders depth images and reduces shifted image pairs to contact summaries.
@@ -365,5 +395,31 @@ mod tests {
         let expected = std::f64::consts::FRAC_PI_4 * r;
         assert!((disc.mean_width() - expected).abs() < 0.05 * expected);
         assert_eq!(region(|_, _| false).mean_width(), 0.0);
+    }
+
+    #[test]
+    fn the_edge_share_counts_the_pixels_of_strips_and_of_a_region_s_top_and_bottom_rows() {
+        // A square: its top and bottom rows.
+        let square = region(|row, col| (50..60).contains(&row) && (50..60).contains(&col));
+        assert!((square.edge_share() - 0.2).abs() < 1e-12);
+        // Strips three pixels wide across the rows and two along them: all of their pixels.
+        let across = region(|row, col| (20..120).contains(&row) && (30..33).contains(&col));
+        let along = region(|row, col| (30..32).contains(&row) && (20..120).contains(&col));
+        for strip in [across, along] {
+            assert!((strip.edge_share() - 1.0).abs() < 1e-12);
+        }
+        // An L: a strip one row tall (100 pixels, all on the edge) under one 6 pixels wide
+        // and 40 rows tall (its top row on the edge).
+        let l = region(|row, col| {
+            (row == 100 && (50..150).contains(&col))
+                || ((60..100).contains(&row) && (50..56).contains(&col))
+        });
+        assert_eq!(l.count, 340);
+        assert!((l.edge_share() - 106.0 / 340.0).abs() < 1e-12);
+        // A disc of radius 20: about 4 / (pi r).
+        let disc = region(|row, col| (f64::from(row) - 100.0).hypot(f64::from(col) - 100.0) < 20.0);
+        let expected = 4.0 / (std::f64::consts::PI * 20.0);
+        assert!((disc.edge_share() - expected).abs() < 0.1 * expected);
+        assert_eq!(region(|_, _| false).edge_share(), 0.0);
     }
 }
