@@ -311,8 +311,9 @@ impl ContactSummary {
     /// above and below. A strip up to three pixels wide across the rows, or two along them,
     /// has all of its pixels there (sampled by a pixel more or less at its edges: the
     /// inclusive edge rule puts a strip 2 pixels wide whose edges lie on pixel centres at
-    /// 3), a square 10 pixels across a fifth of them, a disc of radius r about 4 / (pi r). Only each row's first and last pixel are known, so pieces side by
-    /// side in the same rows count as one span.
+    /// 3), a square 10 pixels across a fifth of them, a disc of radius r about 4 / (pi r).
+    /// Only each row's first and last pixel are known, so pieces side by side in the same
+    /// rows count as one span.
     pub fn edge_share(&self) -> f64 {
         let rows = &self.rows;
         let edge: u64 = (0..rows.len())
