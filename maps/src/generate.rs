@@ -119,9 +119,8 @@ pub fn generate(
 /// to the generator changes the maps (2: the clearance in the metadata; 3: the symmetry;
 /// 4: thin contact regions at a finer pixel; 5: thin by mean width too; 6: the object's
 /// translations out to `omega.reach`; 7: the fit's rotational play in the metadata; 8:
-/// thin regions refined on tilted parts too; 9: thin by the share of edge pixels too; 10:
-/// pixels sample the centres of their squares).
-const MAP_REVISION: u32 = 10;
+/// thin regions refined on tilted parts too; 9: thin by the share of edge pixels too).
+const MAP_REVISION: u32 = 9;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and
@@ -500,16 +499,11 @@ impl<'a> Fine<'a> {
         let span = |range: [u32; 2]| {
             ((i64::from(range[1] - range[0]) + 2 * REFINE_MARGIN + 1) * refine) as usize
         };
-        // Whole vector lanes per row, the padding shared between both sides (even: a whole
-        // number of finer pixels per coarse one, 2 or 4), so that mirror images of a region
-        // get mirror images of its window.
-        let (width, height) = (span(cols), span(rows));
-        let pad = width.next_multiple_of(8) - width;
         let a = PixelWindow {
-            i0: lo(i0, cols[0]) - (pad / 2) as i64,
+            i0: lo(i0, cols[0]),
             j0: lo(j0, rows[0]),
-            width: width + pad,
-            height,
+            width: span(cols).next_multiple_of(8),
+            height: span(rows),
         };
         // B's pixels under A's at the shift: the only ones its reduction reads.
         let b = PixelWindow {

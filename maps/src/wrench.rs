@@ -100,12 +100,11 @@ impl WrenchSetup {
         })
     }
 
-    /// View (u, v) of a point given in A-image columns and rows (a pixel's sample at the
-    /// centre of its square, [`RenderJob::corners`](crate::depth::RenderJob::corners)).
+    /// View (u, v) of a point given in A-image columns and rows.
     fn lattice_to_view(&self, col: f64, row: f64) -> (f64, f64) {
         (
-            (self.origin.0 as f64 + col + 0.5) * self.pixel,
-            (self.origin.1 as f64 + row + 0.5) * self.pixel,
+            (self.origin.0 as f64 + col) * self.pixel,
+            (self.origin.1 as f64 + row) * self.pixel,
         )
     }
 

@@ -22,31 +22,50 @@ impl DepthBackend for CpuBackend {
         let mut img = DepthImage::empty(job.window, job.pixel, job.surface);
         let (w, h) = (job.window.width as i64, job.window.height as i64);
         for t in 0..job.mesh.faces.len() {
-            let p = job.corners(t);
+            let p = job.mesh.triangle(t).map(|q| {
+                let c = job.view.project(&(job.pose * q));
+                [
+                    c[0] / job.pixel - job.window.i0 as f64,
+                    c[1] / job.pixel - job.window.j0 as f64,
+                    c[2],
+                ]
+            });
             let area = edge(p[0], p[1], p[2]);
             if area.abs() < 1e-9 {
                 continue; // edge-on: invisible along the view
             }
-            // The pixels of the triangle's box, a hair wider than it: a corner a rounding
-            // error off a sample leaves the decision to the inclusive test below, as the
-            // GPU's re-test of its grown triangles does.
-            let range = |c: usize, n: i64| {
-                let (lo, hi) = p
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
-                        (l.min(q[c]), h.max(q[c]))
-                    });
-                let first = (lo - BOX_SLACK).ceil().max(0.0) as i64;
-                (first, ((hi + BOX_SLACK).floor() as i64).min(n - 1))
-            };
-            let ((xmin, xmax), (ymin, ymax)) = (range(0, w), range(1, h));
+            let xmin = p
+                .iter()
+                .map(|q| q[0])
+                .fold(f64::INFINITY, f64::min)
+                .ceil()
+                .max(0.0) as i64;
+            let xmax = (p
+                .iter()
+                .map(|q| q[0])
+                .fold(f64::NEG_INFINITY, f64::max)
+                .floor() as i64)
+                .min(w - 1);
+            let ymin = p
+                .iter()
+                .map(|q| q[1])
+                .fold(f64::INFINITY, f64::min)
+                .ceil()
+                .max(0.0) as i64;
+            let ymax = (p
+                .iter()
+                .map(|q| q[1])
+                .fold(f64::NEG_INFINITY, f64::max)
+                .floor() as i64)
+                .min(h - 1);
             let eps = -1e-9 * area.abs();
             for y in ymin..=ymax {
                 // Only the pixels about where the row crosses the triangle: a sliver's box
                 // (a top face fanned from a hole to its corners) is mostly outside it. A
                 // pixel of margin each side; the test below decides as before.
-                // A row a rounding error off a corner: the whole box, the test deciding.
-                let [xl, xr] = row_crossing(&p, y as f64).unwrap_or([xmin as f64, xmax as f64]);
+                let Some([xl, xr]) = row_crossing(&p, y as f64) else {
+                    continue;
+                };
                 let x0 = xmin.max(xl.floor() as i64 - 1);
                 let x1 = xmax.min(xr.ceil() as i64 + 1);
                 for x in x0..=x1 {
@@ -157,9 +176,6 @@ fn row_crossing(p: &[[f64; 3]; 3], y: f64) -> Option<[f64; 2]> {
 fn edge(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
-
-/// How far past a triangle's corners (pixels) its box takes in pixels for the inclusive test.
-const BOX_SLACK: f64 = 1e-6;
 
 /// Lane width of the vector loops.
 const LANES: usize = 8;

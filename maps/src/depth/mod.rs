@@ -83,11 +83,10 @@ pub struct PixelWindow {
 impl PixelWindow {
     /// The smallest window holding every pixel centre inside the (u, v) box, grown by `margin` pixels.
     pub fn covering(umin: f64, umax: f64, vmin: f64, vmax: f64, pixel: f64, margin: i64) -> Self {
-        // Pixel k samples (k + 1/2) pixels ([`RenderJob::corners`]).
-        let i0 = (umin / pixel - 0.5).ceil() as i64 - margin;
-        let i1 = (umax / pixel - 0.5).floor() as i64 + margin;
-        let j0 = (vmin / pixel - 0.5).ceil() as i64 - margin;
-        let j1 = (vmax / pixel - 0.5).floor() as i64 + margin;
+        let i0 = (umin / pixel).ceil() as i64 - margin;
+        let i1 = (umax / pixel).floor() as i64 + margin;
+        let j0 = (vmin / pixel).ceil() as i64 - margin;
+        let j1 = (vmax / pixel).floor() as i64 + margin;
         Self {
             i0,
             j0,
@@ -136,24 +135,6 @@ pub struct RenderJob<'a> {
     pub window: PixelWindow,
     /// Pixel size (m).
     pub pixel: f64,
-}
-
-impl RenderJob<'_> {
-    /// The corners of triangle `t` in the window's pixel coordinates, with their heights
-    /// along w: pixel (i, j) of the window samples the point (i, j) there, the centre of its
-    /// square on the lattice (lattice pixel k spans [k, k + 1) pixels along u and v), so that
-    /// a part's edges at whole multiples of the pixel (a CAD part's round dimensions on a
-    /// round pixel) lie between samples, not on them.
-    pub fn corners(&self, t: usize) -> [[f64; 3]; 3] {
-        self.mesh.triangle(t).map(|q| {
-            let c = self.view.project(&(self.pose * q));
-            [
-                c[0] / self.pixel - self.window.i0 as f64 - 0.5,
-                c[1] / self.pixel - self.window.j0 as f64 - 0.5,
-                c[2],
-            ]
-        })
-    }
 }
 
 /// A rendered depth image: a height along w and the triangle that made it, per pixel.

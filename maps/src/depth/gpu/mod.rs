@@ -661,7 +661,14 @@ fn triangle_records(job: &RenderJob<'_>) -> (Vec<[f32; TRI_FLOATS]>, f64, f64) {
     let (mut hmin, mut hmax) = (f64::INFINITY, f64::NEG_INFINITY);
     let records = (0..job.mesh.faces.len())
         .map(|t| {
-            let mut p = job.corners(t);
+            let mut p = job.mesh.triangle(t).map(|q| {
+                let c = job.view.project(&(job.pose * q));
+                [
+                    c[0] / job.pixel - job.window.i0 as f64,
+                    c[1] / job.pixel - job.window.j0 as f64,
+                    c[2],
+                ]
+            });
             let mut area = edge(p[0], p[1], p[2]);
             if area.abs() < 1e-9 {
                 return [0.0; TRI_FLOATS]; // edge-on, as on the CPU: no fragments
