@@ -25,10 +25,9 @@ fn every_task_s_map_holds_the_exact_contact_height_and_mostly_its_centroid() {
     // translations; the lever point within a pixel of the exact centroid in 99.9-100 % of
     // the cells where the parts stay level (map revision 9; 99.4 % on the octagon before its
     // strips a few pixels wide along some flats beside wider ones were refined); 20 cells
-    // cannot tell 99.9 % from 95 %. On peg_in_hole_4dof's tilts
-    // at 0.25 degrees, 98.8 % of 1000 cells (map revision 8): a contact on a wall is not
-    // seen along the approach at all, and a band narrower than the finer pixel is sampled
-    // by a few of its pixels.
+    // cannot tell 99.9 % from 95 %. On peg_in_hole_4dof's tilts at 0.25 degrees, 98.8 % of
+    // 1000 cells (map revision 8): a contact on a wall is not seen along the approach at
+    // all, and a band narrower than the finer pixel is sampled by a few of its pixels.
     // 40 cells of a turned map, 20 of a map of translations (the tight fit's crescents take
     // a second a cell).
     for name in Task::names() {

@@ -316,9 +316,8 @@ impl ContactSummary {
     /// rows count as one span.
     pub fn edge_share(&self) -> f64 {
         let rows = &self.rows;
-        let edge: u64 = (0..rows.len())
-            .map(|k| {
-                let (row, first, last) = rows[k];
+        let edge: u64 = (rows.iter().enumerate())
+            .map(|(k, &(row, first, last))| {
                 let len = u64::from(last - first + 1);
                 // The span of the row `k` + `d` of the list where it is the next row.
                 let beside = |d: isize| {
