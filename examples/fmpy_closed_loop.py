@@ -56,7 +56,8 @@ class Cell:
         self.entered = self.start_z - APPROACH_CLEARANCE - ENTRY_DEPTH
 
     def contact(self, obj, xy):
-        """One contact motion at the commanded point `xy`; returns (wrench, tcp, settled)."""
+        """One contact motion at the commanded point `xy`; returns (wrench, tcp, ended): ended
+        is whether it settled or fed part A within SUCCESS_HEIGHT of the goal."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
         d.mocap_pos[self.mocap] = [obj[0], obj[1], 0.0]
@@ -75,6 +76,10 @@ class Cell:
             z = d.qpos[self.qpos[2]]
             if z < self.entered:
                 d.ctrl[self.act[3]] = -min(INSERTION_SPEED, max(z, 0.0) / INSERTION_TIME)
+                if z < SUCCESS_HEIGHT and first is None:
+                    # Fed within SUCCESS_HEIGHT of the goal: inserted, the motion ends.
+                    raw, tcp = self.read()
+                    return [-v for v in raw], tcp, True
             if abs(d.qvel[self.dof_z]) < SETTLE_SPEED and d.ncon > 0:
                 if calm == 0:
                     calm_torque = self.read()[0][3:]
@@ -162,9 +167,9 @@ def run_trials(offsets, task="peg_in_hole", fmu=None, seed=1, max_contacts=30, m
         est = Estimator(fmu, md, unzipdir, seed + i, map_path)
         target, contacts, success, tcp = [0.0, 0.0], 0, False, [0.0, 0.0, 0.0]
         while contacts < max_contacts:
-            wrench, tcp, settled = cell.contact(obj, target)
+            wrench, tcp, ended = cell.contact(obj, target)
             contacts += 1
-            if settled and tcp[2] < SUCCESS_HEIGHT:
+            if ended and tcp[2] < SUCCESS_HEIGHT:
                 success = True
                 break
             target = est.measure(wrench, tcp)

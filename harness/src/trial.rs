@@ -4,7 +4,7 @@
 //! it is compared with. With a camera (experiment D), an image is taken before the first
 //! contact motion (handed to the FMU alone) and at every contact (handed with the wrench).
 //!
-//! Success: a motion inserts the part (it settles with the task frame less than
+//! Success: a motion inserts the part (it brings the task frame less than
 //! [`SUCCESS_HEIGHT`](crate::sim::SUCCESS_HEIGHT) above the goal). Every motion, contact or
 //! slide, counts as one contact motion, the successful one included; a trial ends as a
 //! failure after `max_contacts` motions or `max_sim_time` of simulated time.

@@ -48,9 +48,9 @@ pub struct Contact {
     /// Task frame rotation relative to the nominal goal frame at the end (rotation
     /// vector, rad).
     pub rot: [f64; 3],
-    /// Whether the motion settled.
+    /// Whether the motion came to an end: at rest, or fed in (not: out of time).
     pub settled: bool,
-    /// Whether part A settled on the goal: inserted.
+    /// Whether part A came within `sim::SUCCESS_HEIGHT` of the goal: inserted.
     pub inserted: bool,
     /// Simulated time of the motion (s).
     pub time: f64,
