@@ -8,7 +8,7 @@ mod cli;
 use anyhow::{Context, bail};
 use clap::Parser;
 
-use harness::campaign::{Campaign, CampaignOptions, Offsets, Outcome, Plan};
+use harness::campaign::{Campaign, CampaignOptions, Offsets, Outcome, Plan, SetupNote};
 use harness::compare::{MapComparison, RunsComparison};
 use harness::render::{RenderOptions, View};
 use harness::scan::{ScanOptions, scan_to_file};
@@ -170,11 +170,27 @@ fn campaign(options: CampaignOptions) -> anyhow::Result<()> {
 }
 
 /// The campaign benchmark: `options` on one worker (in `<out>/serial`), then on its jobs
-/// (in `<out>/parallel`).
+/// (in `<out>/parallel`), and the lever's accuracy at those settings: how far the scene's
+/// torques miss the map's ([`harness::mismatch`]).
 fn bench(options: CampaignOptions) -> anyhow::Result<()> {
     if options.shard.is_some() {
         bail!("the benchmark runs the whole campaign: drop --shard");
     }
+    let mut lever = None;
+    Campaign::open(
+        CampaignOptions {
+            out: options.out.join("lever"),
+            measure_mismatch: true,
+            mismatch: None,
+            mismatch_angle: None,
+            ..options.clone()
+        },
+        &mut |note| match note {
+            SetupNote::Mismatch { misses, .. } => lever = Some(misses.to_string()),
+            SetupNote::MismatchUnmeasured(why) => lever = Some(format!("not measured: {why}")),
+            _ => {}
+        },
+    )?;
     let run = |name: &str, jobs| -> anyhow::Result<(Outcome, harness::report::Summary)> {
         let mut campaign = Campaign::open(
             CampaignOptions {
@@ -210,6 +226,9 @@ fn bench(options: CampaignOptions) -> anyhow::Result<()> {
             "  {label:<9} {} workers: {:.2} trials/s, {realtime}",
             s.jobs, s.trials_per_second
         );
+    }
+    if let Some(lever) = lever {
+        println!("  lever: the scene's torques miss the map's {lever}");
     }
     println!(
         "  speed-up {:.2} x; results {}",
