@@ -22,7 +22,7 @@ use ftmap::{Axis, FtMap, Pose, Task};
 use crate::calibration;
 use crate::error::{HarnessError, Result, create_dir};
 use crate::eye::Eye;
-use crate::fmu_driver::{Fmu, Settings, default_fmu_path};
+use crate::fmu_driver::{Estimator, Fmu, Settings, default_fmu_path};
 use crate::mismatch::{self, Given, Misses, Source};
 use crate::plot;
 use crate::report::{self, Pace, Summary};
@@ -1172,9 +1172,29 @@ pub fn run_campaign(
     truths: &[Truth],
     seed: u64,
 ) -> Result<Vec<TrialResult>> {
+    let _held = hold_maps(fmu, cfg)?;
     let queue = Queue::new(TrialSet::all(truths, seed), cfg.strategy);
     let done = queue.work(sim, fmu, eye, cfg);
     queue.finish(vec![done])
+}
+
+/// An estimator instance held for a whole run, which no trial uses: the FMU shares a map
+/// file between the instances that hold it and frees it with the last one, so without it
+/// each trial, instantiated after the one before was freed, read its map again (the
+/// 4-DOF map: 327 MB, a second or two a trial). `None` where the trials use no FMU.
+///
+/// # Errors
+/// When the FMU refuses to instantiate or initialise.
+fn hold_maps(fmu: Option<&Fmu>, cfg: &TrialConfig) -> Result<Option<Estimator>> {
+    match (cfg.strategy, fmu) {
+        (Strategy::Pf, Some(f)) => f
+            .estimator(&Settings {
+                trace: None,
+                ..cfg.settings.clone()
+            })
+            .map(Some),
+        _ => Ok(None),
+    }
 }
 
 /// Runs the trials of `set` on `jobs` workers: this thread with `rig`, and `jobs - 1`
@@ -1193,6 +1213,7 @@ pub fn run_parallel(
     cfg: &TrialConfig,
     set: TrialSet,
 ) -> Result<Vec<TrialResult>> {
+    let _held = hold_maps(fmu, cfg)?;
     let queue = Queue::new(set, cfg.strategy);
     let done = std::thread::scope(|s| {
         let workers: Vec<_> = (1..jobs)
