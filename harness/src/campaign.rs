@@ -1181,7 +1181,7 @@ pub fn run_campaign(
 /// An estimator instance held for a whole run, which no trial uses: the FMU shares a map
 /// file between the instances that hold it and frees it with the last one, so without it
 /// each trial, instantiated after the one before was freed, read its map again (the
-/// 4-DOF map: 327 MB, a second or two a trial). `None` where the trials use no FMU.
+/// 4-DOF map: 327 MB, about 0.4 s a trial). `None` where the trials use no FMU.
 ///
 /// # Errors
 /// When the FMU refuses to instantiate or initialise.
