@@ -69,7 +69,7 @@ class Cell:
         settle_steps = round(SETTLE_TIME / m.opt.timestep)
         torque_steps = round(TORQUE_WINDOW / m.opt.timestep)
         calm = steps = 0
-        first, calm_torque = None, None
+        first, calm_torque, fed_home = None, None, False
         while steps < max_steps:
             mujoco.mj_step(m, d)
             steps += 1
@@ -78,8 +78,8 @@ class Cell:
                 d.ctrl[self.act[3]] = -min(INSERTION_SPEED, max(z, 0.0) / INSERTION_TIME)
                 if z < SUCCESS_HEIGHT and first is None:
                     # Fed within SUCCESS_HEIGHT of the goal: inserted, the motion ends.
-                    raw, tcp = self.read()
-                    return [-v for v in raw], tcp, True
+                    fed_home = True
+                    break
             if abs(d.qvel[self.dof_z]) < SETTLE_SPEED and d.ncon > 0:
                 if calm == 0:
                     calm_torque = self.read()[0][3:]
@@ -105,9 +105,9 @@ class Cell:
                 first = now
             break
         raw, tcp = first if first is not None else self.read()
-        settled = calm >= settle_steps or first is not None
+        ended = calm >= settle_steps or first is not None or fed_home
         wrench = [-v for v in raw]
-        return wrench, tcp, settled
+        return wrench, tcp, ended
 
     def read(self):
         """The raw sensor values (force, torque) and the task frame's position now."""
