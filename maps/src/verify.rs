@@ -3,7 +3,8 @@
 //! it touches part B (a shape cast) gives the exact contact height, and rays along the
 //! approach at that height, off the map's pixel lattice, give the contact region and its
 //! centroid. The map's depth channel must agree with the first within the contact
-//! tolerance; the lever point of a centroid map's wrench with the second within a pixel.
+//! tolerance; the lever point of a centroid map's wrench with the second within a pixel,
+//! the region taken where the map's own contact height puts it.
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use parry3d_f64::query::{self, ClosestPoints, Ray, RayCast};
@@ -71,13 +72,19 @@ pub struct CellCheck {
     /// tilted against each other (m): a pixel times the tilt's tangent, since the z-buffer
     /// samples the face that rests on an edge up to a pixel from that edge.
     pub sampling: f64,
+    /// The gap (m) within which the exact contact region is taken: the contact tolerance
+    /// plus how far below the exact contact height the map's depth lies, where that depth
+    /// is within bounds (the map's lowest gap is that much above the exact one, and its
+    /// contact pixels are those within the tolerance of it); the tolerance elsewhere.
+    pub threshold: f64,
     /// Distance across the approach from the map's lever point to the exact contact
     /// region's centroid (m; where no ray along the approach meets the region, the point
     /// where parry puts the parts closest): infinite where neither finds the contact;
     /// `None` where the map's model does not put the lever at the centroid.
     pub centroid_error: Option<f64>,
     /// The exact contact region's centroid across the approach (m; part A's view of
-    /// [`View::along`] its approach), or the closest points' where no ray meets it.
+    /// [`View::along`] its approach; the region within `threshold` of touching), or the
+    /// closest points' where no ray meets it.
     pub centroid: Option<[f64; 2]>,
 }
 
@@ -276,6 +283,17 @@ impl<'a> Parts<'a> {
         let tilt = (r2 * approach).angle(&approach);
         let values = map.cell(cell);
         let depth_error = f64::from(values[NCH - 1]) - (t_obj.dot(&view.w) + rise);
+        let sampling = map.meta().pixel * tilt.tan();
+        // The map's contact region is the pixels within the tolerance of its own lowest gap,
+        // which lies as far above the exact one as its depth lies below the exact contact
+        // height: where that depth is within bounds, its pixels sample the exact region at
+        // the tolerance plus that much (the depth's error is held to its own bound above).
+        let tolerance = self.task.depth.tolerance;
+        let threshold = if depth_error.abs() <= tolerance + sampling {
+            tolerance + (-depth_error).max(0.0)
+        } else {
+            tolerance
+        };
         // A contact that no ray along the approach meets (an edge on a wall) is a point,
         // where parry's closest points put it. A face tilted against another is searched
         // for where it rests on its rim.
@@ -283,7 +301,14 @@ impl<'a> Parts<'a> {
             .centroid
             .then(|| {
                 let phase = Xoshiro256PlusPlus::seed_from_u64(seed ^ (cell as u64).rotate_left(32));
-                self.region(&view, &b_pose, rise, tilt.tan(), phase, [a_range, b_range])
+                self.region(
+                    &view,
+                    &b_pose,
+                    [rise, threshold],
+                    tilt.tan(),
+                    phase,
+                    [a_range, b_range],
+                )
             })
             .flatten();
         let centroid_error = self.centroid.then(|| {
@@ -303,7 +328,8 @@ impl<'a> Parts<'a> {
             cell,
             coords,
             depth_error,
-            sampling: map.meta().pixel * tilt.tan(),
+            sampling,
+            threshold,
             centroid_error,
             centroid: region.map(|(c, _)| c),
         })
@@ -325,8 +351,8 @@ impl<'a> Parts<'a> {
     }
 
     /// Centroid (u, v) and mean height along w of the contact region of A risen by `rise`
-    /// along w against B at `b_pose`: the rays along w where the gap is within the contact
-    /// tolerance of touching, first at about the pixel over all of A; where their centroid
+    /// along w against B at `b_pose`: the rays along w where the gap is within `tolerance`
+    /// of touching, first at about the pixel over all of A; where their centroid
     /// is not fine enough (few rays, or many on the region's edge: a crescent, a strip a
     /// few rays wide), again finer over the region itself, grown ray by ray from them, from
     /// every first ray within a slack of touching and from the closest points ([`Seeds`];
@@ -338,7 +364,7 @@ impl<'a> Parts<'a> {
         &self,
         view: &View,
         b_pose: &Isometry3<f64>,
-        rise: f64,
+        [rise, tolerance]: [f64; 2],
         slope: f64,
         mut phase: Xoshiro256PlusPlus,
         ranges: [[f64; 2]; 2],
@@ -350,6 +376,7 @@ impl<'a> Parts<'a> {
             view,
             b_pose,
             rise,
+            tolerance,
             ranges,
             bounds: [lo, hi],
         };
@@ -358,7 +385,6 @@ impl<'a> Parts<'a> {
             .depth
             .pixel
             .max(((hi[0] - lo[0]) * (hi[1] - lo[1]) / MAX_RAYS).sqrt());
-        let tolerance = self.task.depth.tolerance;
         let lattice = Lattice::new(pitch, &mut phase);
         // A pitch of the tilt's slope more than the tolerance widens a sliver to about a
         // pitch: every place where the parts rest has a first ray within it.
@@ -401,6 +427,8 @@ struct Rays<'a> {
     view: &'a View,
     b_pose: &'a Isometry3<f64>,
     rise: f64,
+    /// How far above touching a ray's gap may be for the ray to be in contact (m).
+    tolerance: f64,
     /// A's and B's extent along w.
     ranges: [[f64; 2]; 2],
     /// A's (u, v) box: no ray outside it meets A.
@@ -583,10 +611,7 @@ impl Rays<'_> {
                 Some(&(_, fewest)) if fewest <= misses => continue,
                 Some(&(touch, _)) => touch,
                 None if seen.len() as f64 >= MAX_FINE_RAYS => return None,
-                None => {
-                    let tolerance = self.parts.task.depth.tolerance;
-                    self.gap_at(lattice.at(k), tolerance).map(|(h, _)| h)
-                }
+                None => self.gap_at(lattice.at(k), self.tolerance).map(|(h, _)| h),
             };
             let misses = if touch.is_some() { 0 } else { misses + 1 };
             seen.insert(k, (touch, misses));
@@ -606,7 +631,7 @@ impl Rays<'_> {
     /// (a rim's sliver, an edge on a wall), and A's height along w there.
     fn closest(&self) -> Option<([f64; 2], f64)> {
         let pair = &self.parts.pair;
-        let tolerance = self.parts.task.depth.tolerance;
+        let tolerance = self.tolerance;
         let lifted = Isometry3::from(Translation3::from(self.view.w * (self.rise + tolerance)));
         match query::closest_points(&lifted, &pair.a, self.b_pose, &pair.b, 2.0 * tolerance) {
             Ok(ClosestPoints::WithinMargin(on_a, _)) => {
