@@ -119,8 +119,9 @@ pub fn generate(
 /// to the generator changes the maps (2: the clearance in the metadata; 3: the symmetry;
 /// 4: thin contact regions at a finer pixel; 5: thin by mean width too; 6: the object's
 /// translations out to `omega.reach`; 7: the fit's rotational play in the metadata; 8:
-/// thin regions refined on tilted parts too; 9: thin by the share of edge pixels too).
-const MAP_REVISION: u32 = 9;
+/// thin regions refined on tilted parts too; 9: thin by the share of edge pixels too; 10:
+/// pixel centres within a thousandth of a pixel of a slanted edge covered).
+const MAP_REVISION: u32 = 10;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and

@@ -9,8 +9,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use ftmap::depth::DepthBackend;
 use ftmap::generate::{GenerateOptions, generate, generate_with, merge, shard_configs};
-use ftmap::map::format;
 use ftmap::map::resolution::too_coarse;
+use ftmap::map::{format, parity};
 use ftmap::{CHANNELS, FtMap, Task, UNITS, WrenchModel};
 
 mod plot;
@@ -724,25 +724,16 @@ fn cmd_bench(
         match &reference {
             None => reference = Some(map),
             Some(r) => {
-                let cells_differing = r
-                    .data()
-                    .chunks_exact(ftmap::NCH)
-                    .zip(map.data().chunks_exact(ftmap::NCH))
-                    .filter(|(a, b)| {
-                        a.iter()
-                            .zip(*b)
-                            .any(|(x, y)| (x - y).abs() > 1e-3 * x.abs().max(1.0))
-                    })
-                    .count();
-                let max_diff = r
-                    .data()
-                    .iter()
-                    .zip(map.data())
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0f32, f32::max);
+                let p = parity::compare(r, &map)?;
                 println!(
-                    "{:<40} cells differing from the first backend: {cells_differing} of {cells} (max |difference| {max_diff:.3e})",
-                    ""
+                    "{:<40} against the first backend: contact differs in {} of {} cells; lines of action over a pixel ({:.1} um) apart in {} (max {:.2} um); depth max {:.3} um apart",
+                    "",
+                    p.contact_differs,
+                    p.cells,
+                    1e6 * r.meta().pixel,
+                    p.lever_over_pixel,
+                    1e6 * p.max_lever,
+                    1e6 * p.max_depth,
                 );
             }
         }

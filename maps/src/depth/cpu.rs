@@ -6,7 +6,11 @@ use std::sync::OnceLock;
 use rayon::prelude::*;
 use wide::f32x8;
 
-use crate::depth::{ContactSummary, DepthBackend, DepthImage, Patch, RenderJob, Shift, Surface};
+use crate::depth::edge_function as edge;
+use crate::depth::{
+    ContactSummary, DepthBackend, DepthImage, Patch, RenderJob, Shift, Surface, edge_thresholds,
+    pixel_box,
+};
 use crate::error::Result;
 
 /// The CPU backend.
@@ -20,7 +24,7 @@ impl DepthBackend for CpuBackend {
 
     fn render(&self, job: &RenderJob<'_>) -> Result<DepthImage> {
         let mut img = DepthImage::empty(job.window, job.pixel, job.surface);
-        let (w, h) = (job.window.width as i64, job.window.height as i64);
+        let w = job.window.width as i64;
         for t in 0..job.mesh.faces.len() {
             let p = job.mesh.triangle(t).map(|q| {
                 let c = job.view.project(&(job.pose * q));
@@ -34,35 +38,15 @@ impl DepthBackend for CpuBackend {
             if area.abs() < 1e-9 {
                 continue; // edge-on: invisible along the view
             }
-            let xmin = p
-                .iter()
-                .map(|q| q[0])
-                .fold(f64::INFINITY, f64::min)
-                .ceil()
-                .max(0.0) as i64;
-            let xmax = (p
-                .iter()
-                .map(|q| q[0])
-                .fold(f64::NEG_INFINITY, f64::max)
-                .floor() as i64)
-                .min(w - 1);
-            let ymin = p
-                .iter()
-                .map(|q| q[1])
-                .fold(f64::INFINITY, f64::min)
-                .ceil()
-                .max(0.0) as i64;
-            let ymax = (p
-                .iter()
-                .map(|q| q[1])
-                .fold(f64::NEG_INFINITY, f64::max)
-                .floor() as i64)
-                .min(h - 1);
-            let eps = -1e-9 * area.abs();
+            let Some([xmin, xmax, ymin, ymax]) = pixel_box(&p, job.window.width, job.window.height)
+            else {
+                continue;
+            };
+            let least = edge_thresholds(&p);
             for y in ymin..=ymax {
                 // Only the pixels about where the row crosses the triangle: a sliver's box
                 // (a top face fanned from a hole to its corners) is mostly outside it. A
-                // pixel of margin each side; the test below decides as before.
+                // pixel of margin each side; the coverage rule decides.
                 let Some([xl, xr]) = row_crossing(&p, y as f64) else {
                     continue;
                 };
@@ -70,14 +54,15 @@ impl DepthBackend for CpuBackend {
                 let x1 = xmax.min(xr.ceil() as i64 + 1);
                 for x in x0..=x1 {
                     let q = [x as f64, y as f64, 0.0];
-                    let (b0, b1, b2) = (
-                        edge(p[1], p[2], q) / area,
-                        edge(p[2], p[0], q) / area,
-                        edge(p[0], p[1], q) / area,
-                    );
-                    if b0 * area.abs() < eps || b1 * area.abs() < eps || b2 * area.abs() < eps {
+                    let e = [
+                        edge(p[1], p[2], q),
+                        edge(p[2], p[0], q),
+                        edge(p[0], p[1], q),
+                    ];
+                    if (0..3).any(|k| e[k] * area.signum() < least[k]) {
                         continue;
                     }
+                    let [b0, b1, b2] = e.map(|v| v / area);
                     let z = (b0 * p[0][2] + b1 * p[1][2] + b2 * p[2][2]) as f32;
                     let k = (y * w + x) as usize;
                     let closer = match job.surface {
@@ -170,11 +155,6 @@ fn row_crossing(p: &[[f64; 3]; 3], y: f64) -> Option<[f64; 2]> {
         }
     }
     range
-}
-
-/// Twice the signed area of (a, b, c) in the image plane.
-fn edge(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
 /// Lane width of the vector loops.

@@ -137,6 +137,59 @@ pub struct RenderJob<'a> {
     pub pixel: f64,
 }
 
+/// How near (pixels) outside a triangle's edge a pixel centre still counts as on it: far
+/// above either backend's rounding (f64 on the CPU; f32 relative to a lattice point by the
+/// triangle on the GPU, about 1e-7 of its size), far below any feature a mesh resolves (0.1
+/// µm at a 0.1 mm pixel).
+pub const ON_EDGE_PX: f64 = 1e-3;
+
+/// How far (m) the height of a pixel centre counted on a triangle's edge from outside may
+/// stray from the edge's, by the triangle's slope: on steep triangles (a wall seen nearly
+/// edge-on) the tolerance shrinks below [`ON_EDGE_PX`] to keep it.
+pub const ON_EDGE_HEIGHT: f64 = 1e-8;
+
+/// The coverage rule both backends share, for the triangle `p` in window pixel coordinates
+/// (either winding) and heights (m), within its box ([`pixel_box`]): per edge `k` (from
+/// corner `k + 1` to corner `k + 2`), the least value of its edge function
+/// `(p[k+2] - p[k+1]) x (q - p[k+1])`, signed positive inside, at which the pixel centre `q`
+/// is covered: inside the triangle, on its edges, or within [`ON_EDGE_PX`] of them (less
+/// on a steep triangle: [`ON_EDGE_HEIGHT`]). A centre on a slanted edge is then covered by
+/// both backends alike, whatever their rounding; on an edge along the rows or columns, the
+/// box decides, computed once in f64 for both.
+pub fn edge_thresholds(p: &[[f64; 3]; 3]) -> [f64; 3] {
+    let area = edge_function(p[0], p[1], p[2]);
+    let d = |k: usize, c: usize| p[k][c] - p[0][c];
+    // The height's gradient per pixel, along u and along v.
+    let slope = ((d(1, 2) * d(2, 1) - d(2, 2) * d(1, 1)) / area)
+        .hypot((d(1, 0) * d(2, 2) - d(2, 0) * d(1, 2)) / area);
+    let near = ON_EDGE_PX.min(ON_EDGE_HEIGHT / slope);
+    std::array::from_fn(|k| {
+        let (a, b) = (p[(k + 1) % 3], p[(k + 2) % 3]);
+        -near * (b[0] - a[0]).hypot(b[1] - a[1])
+    })
+}
+
+/// The pixel centres (first and last column, first and last row) within the bounding box
+/// of the triangle `p` (window pixel coordinates), clipped to a window `width` x `height`;
+/// `None` where none is.
+pub fn pixel_box(p: &[[f64; 3]; 3], width: usize, height: usize) -> Option<[i64; 4]> {
+    let range = |c: usize, size: usize| {
+        let lo = p.iter().map(|q| q[c]).fold(f64::INFINITY, f64::min);
+        let hi = p.iter().map(|q| q[c]).fold(f64::NEG_INFINITY, f64::max);
+        (
+            lo.ceil().max(0.0) as i64,
+            (hi.floor() as i64).min(size as i64 - 1),
+        )
+    };
+    let ((x0, x1), (y0, y1)) = (range(0, width), range(1, height));
+    (x0 <= x1 && y0 <= y1).then_some([x0, x1, y0, y1])
+}
+
+/// Twice the signed area of (a, b, c) in the image plane (u, v).
+pub fn edge_function(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
 /// A rendered depth image: a height along w and the triangle that made it, per pixel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DepthImage {

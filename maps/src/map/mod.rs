@@ -10,6 +10,7 @@ use crate::wrench::WrenchModel;
 pub mod blend;
 pub mod centre;
 pub mod format;
+pub mod parity;
 pub mod resolution;
 
 /// Channels stored per cell, in order.

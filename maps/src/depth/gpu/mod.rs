@@ -4,10 +4,13 @@
 //! documented rounding.
 //!
 //! Coverage: the rasterizer covers each triangle grown by [`GROW_PX`] pixel and the
-//! fragment shader re-tests the pixel centre against the true triangle with the CPU's
-//! inclusive-edge rule, in f32 (the CPU tests in f64). Results differ only for pixel
-//! centres within ~1e-5 px of a silhouette edge, and in the triangle index where a pixel
-//! centre lies on an edge shared by two triangles of equal height (the height is the same).
+//! fragment shader re-tests the pixel centre against the true triangle with the CPU's rule
+//! ([`crate::depth::edge_thresholds`]: covered within [`crate::depth::ON_EDGE_PX`] of it,
+//! within the pixel box the CPU computes in f64), in f32 relative to a lattice point by the
+//! triangle (the CPU tests in f64). Results differ only for pixel centres whose distance
+//! outside an edge is within f32 rounding of that tolerance, and in the triangle index
+//! where a pixel centre lies on an edge shared by two triangles of equal height (the
+//! height is the same).
 //! Heights are written as an R32Float colour (the depth buffer only decides visibility),
 //! so they agree with the CPU to f32 rounding (~1e-9 m for parts of centimetres).
 
@@ -15,13 +18,16 @@ use std::sync::{Arc, Mutex, PoisonError, mpsc};
 
 use wgpu::util::DeviceExt;
 
-use crate::depth::{ContactSummary, DepthBackend, DepthImage, RenderJob, Shift, Surface};
+use crate::depth::edge_function as edge;
+use crate::depth::{
+    ContactSummary, DepthBackend, DepthImage, RenderJob, Shift, Surface, edge_thresholds, pixel_box,
+};
 use crate::error::{MapError, Result};
 
 /// How far (pixels) each triangle is grown for the rasterizer, more than its sub-pixel snapping.
 pub const GROW_PX: f64 = 1.0 / 32.0;
 /// Floats per triangle record of the render shader.
-const TRI_FLOATS: usize = 20;
+const TRI_FLOATS: usize = 24;
 /// Largest render tile side (pixels); larger windows are rendered in tiles.
 const MAX_TILE: u32 = 4096;
 /// Upload value of an empty A pixel (the shader's sentinel; WGSL has no infinities).
@@ -651,11 +657,6 @@ fn from_ordered(u: u32) -> f32 {
     })
 }
 
-/// Twice the signed area of (a, b, c).
-fn edge(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
-    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-}
-
 /// The render shader's per-triangle records (window pixel coordinates) and the height range.
 fn triangle_records(job: &RenderJob<'_>) -> (Vec<[f32; TRI_FLOATS]>, f64, f64) {
     let (mut hmin, mut hmax) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -670,9 +671,11 @@ fn triangle_records(job: &RenderJob<'_>) -> (Vec<[f32; TRI_FLOATS]>, f64, f64) {
                 ]
             });
             let mut area = edge(p[0], p[1], p[2]);
-            if area.abs() < 1e-9 {
-                return [0.0; TRI_FLOATS]; // edge-on, as on the CPU: no fragments
-            }
+            let pixels = pixel_box(&p, job.window.width, job.window.height);
+            let Some(pixels) = pixels.filter(|_| area.abs() >= 1e-9) else {
+                // Edge-on or outside the window, as on the CPU: no fragments.
+                return [0.0; TRI_FLOATS];
+            };
             if area < 0.0 {
                 p.swap(1, 2);
                 area = -area;
@@ -688,22 +691,28 @@ fn triangle_records(job: &RenderJob<'_>) -> (Vec<[f32; TRI_FLOATS]>, f64, f64) {
             let gx = (d1[2] * d2[1] - d2[2] * d1[1]) / area;
             let gy = (d1[0] * d2[2] - d2[0] * d1[2]) / area;
             let grown = grow(&p, area);
+            // The corners and the plane are anchored at a lattice point next to the first
+            // corner: the shader's q - anchor is then exact, the corners' rounding is
+            // relative to the triangle's size, and steep planes keep their precision.
+            let anchor = [p[0][0].round(), p[0][1].round()];
             let mut r = [0.0f32; TRI_FLOATS];
             for k in 0..3 {
                 r[2 * k] = grown[k][0] as f32;
                 r[2 * k + 1] = grown[k][1] as f32;
-                r[6 + 2 * k] = p[k][0] as f32;
-                r[7 + 2 * k] = p[k][1] as f32;
+                r[6 + 2 * k] = (p[k][0] - anchor[0]) as f32;
+                r[7 + 2 * k] = (p[k][1] - anchor[1]) as f32;
             }
-            // The plane is anchored at a lattice point next to the first corner: the
-            // shader's q - anchor is then exact and steep planes keep their precision.
-            let anchor = [p[0][0].round(), p[0][1].round()];
+            for (k, least) in edge_thresholds(&p).into_iter().enumerate() {
+                r[15 + k] = least as f32;
+            }
             r[12] = (p[0][2] + gx * (anchor[0] - p[0][0]) + gy * (anchor[1] - p[0][1])) as f32;
             r[13] = gx as f32;
             r[14] = gy as f32;
-            r[15] = area as f32;
-            r[16] = anchor[0] as f32;
-            r[17] = anchor[1] as f32;
+            r[18] = anchor[0] as f32;
+            r[19] = anchor[1] as f32;
+            for (k, v) in pixels.into_iter().enumerate() {
+                r[20 + k] = v as f32;
+            }
             r
         })
         .collect();
