@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use crate::depth::cpu::{CpuBackend, InPlace, WholeRows, contact_in_place};
 use crate::depth::{
     ContactSummary, DepthBackend, DepthImage, PixelWindow, RenderJob, Shift, Surface, View,
+    weigh_outline,
 };
 use crate::error::{MapError, Result};
 use crate::exact::Pair;
@@ -120,8 +121,9 @@ pub fn generate(
 /// 4: thin contact regions at a finer pixel; 5: thin by mean width too; 6: the object's
 /// translations out to `omega.reach`; 7: the fit's rotational play in the metadata; 8:
 /// thin regions refined on tilted parts too; 9: thin by the share of edge pixels too; 10:
-/// pixel centres within a thousandth of a pixel of a slanted edge covered).
-const MAP_REVISION: u32 = 10;
+/// pixel centres within a thousandth of a pixel of a slanted edge covered; 11: pixels on
+/// the parts' outlines counted by the share of them covered).
+const MAP_REVISION: u32 = 11;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and
@@ -358,13 +360,10 @@ impl Context<'_> {
                 ]
             })
             .collect();
-        let summaries = self.backend.contacts(
-            &a_img,
-            &b_img,
-            &b_normals,
-            &shifts,
-            self.task.depth.tolerance as f32,
-        )?;
+        let tolerance = self.task.depth.tolerance as f32;
+        let summaries = self
+            .backend
+            .contacts(&a_img, &b_img, &b_normals, &shifts, tolerance)?;
 
         let setup = WrenchSetup {
             view,
@@ -393,19 +392,24 @@ impl Context<'_> {
         let fine = Fine::render(self, view, poses, &windows, pixel, refine, &b_normals)?;
         // Filled in place (every shift's slot known beforehand): a collection of unknown
         // length would grow by copies, a large part of a map's time.
+        // Each thin region reduced again at the finer pixel where it finds a contact there;
+        // the others' outline pixels weighed here ([`weigh_outline`]).
         let mut contacts: Vec<(ContactSummary, WrenchSetup)> =
             summaries.into_iter().map(|c| (c, setup)).collect();
-        if let Some(fine) = &fine {
-            (contacts.par_iter_mut().zip(&shifts).zip(&windows)).for_each_init(
-                InPlace::default,
-                |scratch, ((slot, shift), w)| {
-                    if let Some(w) = w {
-                        let c = std::mem::replace(&mut slot.0, ContactSummary::none(0.0));
-                        *slot = fine.contact(c, *shift, w, &setup, &b_normals, scratch);
+        let (a_whole, b_whole) = (a_img.whole(), b_img.whole());
+        (contacts.par_iter_mut().zip(&shifts).zip(&windows)).for_each_init(
+            InPlace::default,
+            |scratch, ((slot, shift), w)| {
+                let finer = (fine.as_ref().zip(w.as_ref()))
+                    .and_then(|(f, w)| f.contact(*shift, w, &setup, &b_normals, scratch));
+                match finer {
+                    Some(finer) => *slot = finer,
+                    None => {
+                        weigh_outline(&mut slot.0, a_whole, b_whole, &b_normals, *shift, tolerance)
                     }
-                },
-            );
-        }
+                }
+            },
+        );
         let s0 = Point3::from(self.task.contact.sensor_origin);
         let mut out = vec![(0, [0.0; NCH]); cells.len()];
         (out.par_iter_mut().zip(&cells)).try_for_each(|(slot, (idx, shift, tw, t1))| {
@@ -557,17 +561,17 @@ impl<'a> Fine<'a> {
         }))
     }
 
-    /// The contact `c` of B at `shift` again at the finer pixel over its `windows`, with the
-    /// setup of that finer image (the coarse one's where the finer images find no contact).
+    /// The contact of B at `shift` again at the finer pixel over its `windows` (its outline
+    /// pixels weighed, [`weigh_outline`]), with the setup of that finer image (`coarse`:
+    /// the coarse one's); `None` where the finer images find no contact.
     fn contact(
         &self,
-        c: ContactSummary,
         shift: Shift,
         windows: &[PixelWindow; 2],
         coarse: &WrenchSetup,
         b_normals: &[[f32; 3]],
         scratch: &mut InPlace,
-    ) -> (ContactSummary, WrenchSetup) {
+    ) -> Option<(ContactSummary, WrenchSetup)> {
         let [a_win, b_win] = *windows;
         let shift = Shift {
             du: shift.du * self.refine,
@@ -582,20 +586,10 @@ impl<'a> Fine<'a> {
         // On the CPU whatever the backend, in place: each region is one small window of the
         // finer images, for which a GPU dispatch (and on lavapipe its setup) costs far more
         // than the reduction itself.
-        let fine = contact_in_place(
-            self.a.patch(a_win),
-            self.b.patch(b_win),
-            &self.rows,
-            b_normals,
-            shift,
-            tolerance,
-            scratch,
-        );
-        if fine.count > 0 {
-            (fine, setup)
-        } else {
-            (c, *coarse)
-        }
+        let (a, b) = (self.a.patch(a_win), self.b.patch(b_win));
+        let mut fine = contact_in_place(a, b, &self.rows, b_normals, shift, tolerance, scratch);
+        weigh_outline(&mut fine, a, b, b_normals, shift, tolerance);
+        (fine.count > 0).then_some((fine, setup))
     }
 }
 

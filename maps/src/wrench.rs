@@ -69,7 +69,7 @@ impl WrenchSetup {
             return None;
         }
         let force = self.force_on_a(c);
-        let n = f64::from(c.count);
+        let n = c.area();
         let mean_h = c.sum_height / n;
         let lever_point = match model {
             WrenchModel::Paper => {
@@ -246,6 +246,7 @@ mod tests {
             sum_height: 0.0,
             sum_normal: n,
             rows: vec![(0, 0, 0)],
+            deficit: 0.0,
         };
         // 10 degrees < atan(0.3) = 16.7 degrees: friction holds, force straight up.
         let s = 10f64.to_radians();

@@ -1,15 +1,17 @@
 //! FT-Maps against cases computed independently inside the tests: a flat peg on a plate,
 //! the pressure centroid of a peg resting on a hole's rim (integrated numerically here),
 //! the lever of a peg tilted on a plate under the paper's model, the insertion depth, and
-//! the symmetries of the peg and octagon maps.
+//! the symmetries of the peg and octagon maps, and pixels on an outline through pixel
+//! centres counted by the share of them covered.
 
 use std::f64::consts::PI;
 
 use ftmap::depth::cpu::CpuBackend;
+use ftmap::depth::{DepthBackend, PixelWindow, RenderJob, Surface, View};
 use ftmap::generate::{GenerateOptions, generate, generate_with};
 use ftmap::mesh::Mesh;
 use ftmap::{FtMap, Task, WrenchModel};
-use nalgebra::Point3;
+use nalgebra::{Isometry3, Point3, Vector3};
 
 /// A closed prism over a convex polygon (counter-clockwise), from z0 to z1.
 fn prism(polygon: &[(f64, f64)], z0: f64, z1: f64) -> Mesh {
@@ -152,6 +154,129 @@ fn peg_on_the_rim_torque_follows_the_crescent_centroid() {
         );
         let _ = sensor_z;
     }
+}
+
+/// Closed boxes in one mesh, each given as (x0, x1, y0, y1), from z0 to z1; each face
+/// split along its diagonal from its first corner (the bottom from (x0, y0) to (x1, y1)).
+fn boxes(rects: &[[f64; 4]], z0: f64, z1: f64) -> Mesh {
+    let mut vertices = Vec::new();
+    let mut faces = Vec::new();
+    for &[x0, x1, y0, y1] in rects {
+        let o = vertices.len() as u32;
+        for z in [z0, z1] {
+            vertices.extend(
+                [(x0, y0), (x1, y0), (x1, y1), (x0, y1)].map(|(x, y)| Point3::new(x, y, z)),
+            );
+        }
+        let quads = [
+            [0, 3, 2, 1],
+            [4, 5, 6, 7],
+            [0, 1, 5, 4],
+            [1, 2, 6, 5],
+            [2, 3, 7, 6],
+            [3, 0, 4, 7],
+        ];
+        for [a, b, c, d] in quads.map(|q| q.map(|k| o + k)) {
+            faces.extend([[a, b, c], [a, c, d]]);
+        }
+    }
+    Mesh::from_parts(vertices, faces)
+}
+
+#[test]
+fn a_face_s_outline_on_pixel_centres_counts_half_and_its_corners_a_quarter() {
+    // A 20 x 20 pixel face seen from below, its sides on rows and columns of centres
+    // (up to rounding: 0.01 m over 1 mm pixels), its diagonal through centres too.
+    let pixel = 1e-3;
+    let mesh = boxes(&[[-0.01, 0.01, -0.01, 0.01]], 0.0, 0.02);
+    let job = RenderJob {
+        mesh: &mesh,
+        pose: Isometry3::identity(),
+        view: View::along(Vector3::new(0.0, 0.0, -1.0)),
+        surface: Surface::Bottom,
+        window: PixelWindow::covering(-0.01, 0.01, -0.01, 0.01, pixel, 2),
+        pixel,
+    };
+    let img = CpuBackend.render(&job).expect("render");
+    // Every centre within the face's square, its sides included, has the face.
+    assert_eq!(img.covered(), 21 * 21);
+    let width = job.window.width as i64;
+    let at = |k: u32| {
+        let k = i64::from(k);
+        [k % width + job.window.i0, k / width + job.window.j0]
+    };
+    let mut expected = Vec::new();
+    for j in -10..=10i64 {
+        for i in -10..=10i64 {
+            let on = [i.abs() == 10, j.abs() == 10];
+            match on {
+                [true, true] => expected.push(([i, j], 0.25)),
+                [true, false] | [false, true] => expected.push(([i, j], 0.5)),
+                _ => {}
+            }
+        }
+    }
+    let found: Vec<([i64; 2], f32)> = img.coverage.iter().map(|&(k, s)| (at(k), s)).collect();
+    assert_eq!(found.len(), expected.len(), "{found:?}");
+    for ((p, s), (q, e)) in found.iter().zip(&expected) {
+        assert_eq!(p, q);
+        assert!((s - e).abs() < 1e-6, "{p:?}: {s}, expected {e}");
+    }
+    // Its area then is the face's, in pixels.
+    let covered: f64 = img.coverage.iter().map(|&(_, s)| 1.0 - f64::from(s)).sum();
+    assert!((img.covered() as f64 - covered - 400.0).abs() < 1e-4);
+}
+
+#[test]
+fn strips_whose_edges_lie_on_pixel_centres_weigh_as_much_as_their_area() {
+    // A square peg (80 x 80 pixels) over two boxes whose edges lie on pixel centres, as a
+    // CAD part's round dimensions do on a lattice of round pixels: it rests on a strip 2
+    // pixels wide along one box's edge and a strip 70 x 20 pixels on the other. The
+    // coverage rule samples the narrow strip 3 pixels wide; counted so, the lever is 2
+    // pixels off.
+    let task = peg_task(1e-4, 1e-4);
+    let p = task.depth.pixel;
+    let h = 40.0 * p;
+    let peg = prism(&square(h), 0.0, 0.04);
+    let (far, narrow, tall) = (0.02, 2.0 * p, 20.0 * p);
+    let plate = boxes(
+        &[
+            [-far, -h + narrow, -far, far],
+            [-h + 10.0 * p, far, -far, -h + tall],
+        ],
+        -0.01,
+        0.0,
+    );
+    let map = generate_with(
+        &task,
+        &peg,
+        &plate,
+        &CpuBackend,
+        &GenerateOptions::default(),
+        &|_| (),
+    )
+    .unwrap();
+    // The two rectangles of the peg's face over the boxes: area and centroid.
+    let rects = [[-h, -h + narrow, -h, h], [-h + 10.0 * p, h, -h, -h + tall]];
+    let area: f64 = rects.iter().map(|r| (r[1] - r[0]) * (r[3] - r[2])).sum();
+    let centre = |a: usize| {
+        rects
+            .iter()
+            .map(|r| (r[1] - r[0]) * (r[3] - r[2]) * 0.5 * (r[2 * a] + r[2 * a + 1]))
+            .sum::<f64>()
+            / area
+    };
+    let c = cell_at(&map, 0.0, 0.0);
+    // Force (0, 0, F) at the centroid: torque (cy F, -cx F) about the sensor on the axis.
+    let lever = [-f64::from(c[4]) / F, f64::from(c[3]) / F];
+    let miss = (lever[0] - centre(0)).hypot(lever[1] - centre(1));
+    assert!(
+        miss < 0.05 * p,
+        "lever {lever:?}, the face's centroid over the boxes ({}, {}): {:.3} pixels off",
+        centre(0),
+        centre(1),
+        miss / p
+    );
 }
 
 #[test]

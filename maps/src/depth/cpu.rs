@@ -8,8 +8,8 @@ use wide::f32x8;
 
 use crate::depth::edge_function as edge;
 use crate::depth::{
-    ContactSummary, DepthBackend, DepthImage, Patch, RenderJob, Shift, Surface, edge_thresholds,
-    pixel_box,
+    ContactSummary, DepthBackend, DepthImage, EDGE_ON, Patch, RenderJob, Shift, Surface,
+    edge_thresholds, outline_coverage, pixel_box,
 };
 use crate::error::Result;
 
@@ -26,16 +26,9 @@ impl DepthBackend for CpuBackend {
         let mut img = DepthImage::empty(job.window, job.pixel, job.surface);
         let w = job.window.width as i64;
         for t in 0..job.mesh.faces.len() {
-            let p = job.mesh.triangle(t).map(|q| {
-                let c = job.view.project(&(job.pose * q));
-                [
-                    c[0] / job.pixel - job.window.i0 as f64,
-                    c[1] / job.pixel - job.window.j0 as f64,
-                    c[2],
-                ]
-            });
+            let p = job.corners(t);
             let area = edge(p[0], p[1], p[2]);
-            if area.abs() < 1e-9 {
+            if area.abs() < EDGE_ON {
                 continue; // edge-on: invisible along the view
             }
             let Some([xmin, xmax, ymin, ymax]) = pixel_box(&p, job.window.width, job.window.height)
@@ -47,9 +40,7 @@ impl DepthBackend for CpuBackend {
                 // Only the pixels about where the row crosses the triangle: a sliver's box
                 // (a top face fanned from a hole to its corners) is mostly outside it. A
                 // pixel of margin each side; the coverage rule decides.
-                let Some([xl, xr]) = row_crossing(&p, y as f64) else {
-                    continue;
-                };
+                let [xl, xr] = row_crossing(&p, y as f64);
                 let x0 = xmin.max(xl.floor() as i64 - 1);
                 let x1 = xmax.min(xr.ceil() as i64 + 1);
                 for x in x0..=x1 {
@@ -76,6 +67,7 @@ impl DepthBackend for CpuBackend {
                 }
             }
         }
+        img.coverage = outline_coverage(job, &img);
         Ok(img)
     }
 
@@ -134,25 +126,28 @@ impl DepthBackend for CpuBackend {
 }
 
 /// Where the line at height `y` crosses the triangle `p` in the image plane: the least and
-/// greatest x of its edges' points at that height (`None` where it misses them all).
-fn row_crossing(p: &[[f64; 3]; 3], y: f64) -> Option<[f64; 2]> {
-    let mut range: Option<[f64; 2]> = None;
-    let mut take = |x: f64| {
-        range = Some(match range {
-            Some([l, r]) => [l.min(x), r.max(x)],
-            None => [x, x],
-        });
-    };
+/// greatest x of its edges' points at that height, or at the triangle's nearest one where
+/// `y` lies outside it (just outside, within the pixel box: a row of centres the coverage
+/// rule takes in along an edge along the rows, [`pixel_box`]).
+fn row_crossing(p: &[[f64; 3]; 3], y: f64) -> [f64; 2] {
+    let lo = p.iter().map(|q| q[1]).fold(f64::INFINITY, f64::min);
+    let hi = p.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max);
+    let y = y.clamp(lo, hi);
+    let mut range = [f64::INFINITY, f64::NEG_INFINITY];
     for k in 0..3 {
         let (a, b) = (p[k], p[(k + 1) % 3]);
-        if a[1] == b[1] {
-            if a[1] == y {
-                take(a[0]);
-                take(b[0]);
+        let x = if a[1] == b[1] {
+            if a[1] != y {
+                continue;
             }
+            range = [range[0].min(a[0]), range[1].max(a[0])];
+            b[0]
         } else if (a[1] - y) * (b[1] - y) <= 0.0 {
-            take(a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]));
-        }
+            a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
+        } else {
+            continue;
+        };
+        range = [range[0].min(x), range[1].max(x)];
     }
     range
 }
@@ -898,7 +893,7 @@ mod tests {
             );
             for k in 0..=200 {
                 let y = lo + (hi - lo) * f64::from(k) / 200.0;
-                let [l, r] = row_crossing(p, y).expect("a row within the triangle's height");
+                let [l, r] = row_crossing(p, y);
                 for i in 0..=2000 {
                     let q = [-1.0 + 102.0 * f64::from(i) / 2000.0, y, 0.0];
                     let e = [
@@ -914,7 +909,8 @@ mod tests {
                     }
                 }
             }
-            assert_eq!(row_crossing(p, hi + 0.5), None);
+            // Beyond the triangle's rows: its nearest row's crossing.
+            assert_eq!(row_crossing(p, hi + 0.5), row_crossing(p, hi));
         }
     }
 

@@ -4,7 +4,7 @@
 use nalgebra::{Isometry3, Point3, Vector3};
 
 use crate::error::Result;
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, NO_NEIGHBOUR};
 
 pub mod cpu;
 #[cfg(feature = "gpu")]
@@ -137,6 +137,20 @@ pub struct RenderJob<'a> {
     pub pixel: f64,
 }
 
+impl RenderJob<'_> {
+    /// The corners of triangle `t` in window pixel coordinates, with their heights (m).
+    pub fn corners(&self, t: usize) -> [[f64; 3]; 3] {
+        self.mesh.triangle(t).map(|q| {
+            let c = self.view.project(&(self.pose * q));
+            [
+                c[0] / self.pixel - self.window.i0 as f64,
+                c[1] / self.pixel - self.window.j0 as f64,
+                c[2],
+            ]
+        })
+    }
+}
+
 /// How near (pixels) outside a triangle's edge a pixel centre still counts as on it: far
 /// above either backend's rounding (f64 on the CPU; f32 relative to a lattice point by the
 /// triangle on the GPU, about 1e-7 of its size), far below any feature a mesh resolves (0.1
@@ -153,9 +167,9 @@ pub const ON_EDGE_HEIGHT: f64 = 1e-8;
 /// corner `k + 1` to corner `k + 2`), the least value of its edge function
 /// `(p[k+2] - p[k+1]) x (q - p[k+1])`, signed positive inside, at which the pixel centre `q`
 /// is covered: inside the triangle, on its edges, or within [`ON_EDGE_PX`] of them (less
-/// on a steep triangle: [`ON_EDGE_HEIGHT`]). A centre on a slanted edge is then covered by
-/// both backends alike, whatever their rounding; on an edge along the rows or columns, the
-/// box decides, computed once in f64 for both.
+/// on a steep triangle: [`ON_EDGE_HEIGHT`]). A centre on an edge is then covered by both
+/// backends alike, whatever their rounding (the box, [`pixel_box`], is computed once in
+/// f64 for both), and counts as on the edge ([`outline_coverage`]).
 pub fn edge_thresholds(p: &[[f64; 3]; 3]) -> [f64; 3] {
     let area = edge_function(p[0], p[1], p[2]);
     let d = |k: usize, c: usize| p[k][c] - p[0][c];
@@ -170,20 +184,176 @@ pub fn edge_thresholds(p: &[[f64; 3]; 3]) -> [f64; 3] {
 }
 
 /// The pixel centres (first and last column, first and last row) within the bounding box
-/// of the triangle `p` (window pixel coordinates), clipped to a window `width` x `height`;
-/// `None` where none is.
+/// of the triangle `p` (window pixel coordinates) grown by [`ON_EDGE_PX`], clipped to a
+/// window `width` x `height`; `None` where none is. Grown, so that a centre on an edge
+/// along the rows or columns is covered up to rounding, as one on a slanted edge is.
 pub fn pixel_box(p: &[[f64; 3]; 3], width: usize, height: usize) -> Option<[i64; 4]> {
     let range = |c: usize, size: usize| {
         let lo = p.iter().map(|q| q[c]).fold(f64::INFINITY, f64::min);
         let hi = p.iter().map(|q| q[c]).fold(f64::NEG_INFINITY, f64::max);
         (
-            lo.ceil().max(0.0) as i64,
-            (hi.floor() as i64).min(size as i64 - 1),
+            (lo - ON_EDGE_PX).ceil().max(0.0) as i64,
+            ((hi + ON_EDGE_PX).floor() as i64).min(size as i64 - 1),
         )
     };
     let ((x0, x1), (y0, y1)) = (range(0, width), range(1, height));
     (x0 <= x1 && y0 <= y1).then_some([x0, x1, y0, y1])
 }
+
+/// Per pixel whose centre lies on the outline of the surface `img` sees (on an edge of the
+/// triangle seen there, within the coverage rule's distance, whose neighbour across it is
+/// not seen from the same side: a wall edge-on, or a face turned away), the share of the
+/// pixel that surface covers: 1/2 on an edge; at a corner, the angle of the triangles seen
+/// about it between its two outline edges, over a turn. Sorted by pixel index. Every other
+/// pixel with a surface counts whole. So a strip whose edges lie on pixel centres (round
+/// dimensions on a lattice of round pixels), which the coverage rule samples a pixel
+/// wider, counts as wide as it is. Open and non-manifold edges, and those beside a sliver
+/// that closes a T-junction, are not outlines.
+pub fn outline_coverage(job: &RenderJob<'_>, img: &DepthImage) -> Vec<(u32, f32)> {
+    let (width, height) = (job.window.width as i64, job.window.height as i64);
+    let fan = Fan::of(job);
+    // The pixels whose centre lies on an outline edge of the triangle seen there.
+    let mut on = std::collections::BTreeMap::new();
+    for (t, p) in fan.corners.iter().enumerate() {
+        if !fan.seen(t) {
+            continue;
+        }
+        for k in (0..3).filter(|&k| fan.outline(t, k)) {
+            let (a, b) = (p[(k + 1) % 3], p[(k + 2) % 3]);
+            // The centres within a thousandth of a pixel of the edge's line: at most one per
+            // step along its longer axis.
+            let along = usize::from((b[1] - a[1]).abs() > (b[0] - a[0]).abs());
+            let (lo, hi) = (a[along].min(b[along]), a[along].max(b[along]));
+            let slope = (b[1 - along] - a[1 - along]) / (b[along] - a[along]);
+            for x in (lo - ON_EDGE_PX).ceil() as i64..=(hi + ON_EDGE_PX).floor() as i64 {
+                let y = (a[1 - along] + (x as f64 - a[along]) * slope).round() as i64;
+                let (i, j) = if along == 0 { (x, y) } else { (y, x) };
+                if i < 0 || j < 0 || i >= width || j >= height {
+                    continue;
+                }
+                let idx = (j * width + i) as usize;
+                if img.tri[idx] as usize == t && fan.on_edge(t, k, [i as f64, j as f64, 0.0]) {
+                    on.insert(idx as u32, t);
+                }
+            }
+        }
+    }
+    on.into_iter()
+        .map(|(idx, t)| {
+            let q = [
+                (idx as i64 % width) as f64,
+                (idx as i64 / width) as f64,
+                0.0,
+            ];
+            let edges: Vec<usize> = (0..3).filter(|&k| fan.on_edge(t, k, q)).collect();
+            let share = match edges[..] {
+                // On two edges: at the corner they share, the one neither of them faces.
+                [k1, k2] => fan.angle(t, 3 - k1 - k2) / std::f64::consts::TAU,
+                _ => 0.5,
+            };
+            (idx, share as f32)
+        })
+        .collect()
+}
+
+/// A mesh's triangles as a render job sees them, for [`outline_coverage`].
+struct Fan<'a> {
+    mesh: &'a Mesh,
+    /// Each triangle's corners in window pixels, with their heights.
+    corners: Vec<[[f64; 3]; 3]>,
+}
+
+impl<'a> Fan<'a> {
+    fn of(job: &RenderJob<'a>) -> Self {
+        Self {
+            mesh: job.mesh,
+            corners: (0..job.mesh.faces.len()).map(|t| job.corners(t)).collect(),
+        }
+    }
+
+    /// Twice triangle `t`'s signed area in the image.
+    fn area(&self, t: usize) -> f64 {
+        let p = &self.corners[t];
+        edge_function(p[0], p[1], p[2])
+    }
+
+    /// Whether triangle `t` is rendered (not edge-on).
+    fn seen(&self, t: usize) -> bool {
+        self.area(t).abs() >= EDGE_ON
+    }
+
+    /// The triangle across edge `k` of `t` when it continues `t`'s surface as seen (same
+    /// side up; a sliver closing a T-junction continues it, and is continued); `Some(None)`
+    /// at an outline, `None` at an open or non-manifold edge.
+    fn next(&self, t: usize, k: usize) -> Option<Option<usize>> {
+        let n = self.mesh.across[t][k];
+        if n == NO_NEIGHBOUR {
+            return None;
+        }
+        let n = n as usize;
+        let continues = self.mesh.is_sliver(n)
+            || (self.seen(n)
+                && (self.mesh.is_sliver(t) || self.area(n).signum() == self.area(t).signum()));
+        Some(continues.then_some(n))
+    }
+
+    /// Whether edge `k` of triangle `t` is an outline of the surface seen.
+    fn outline(&self, t: usize, k: usize) -> bool {
+        self.next(t, k) == Some(None)
+    }
+
+    /// Whether the pixel centre `q` lies on edge `k` of triangle `t` within the coverage
+    /// rule's distance ([`edge_thresholds`]), either side.
+    fn on_edge(&self, t: usize, k: usize, q: [f64; 3]) -> bool {
+        let p = &self.corners[t];
+        edge_function(p[(k + 1) % 3], p[(k + 2) % 3], q).abs() <= -edge_thresholds(p)[k]
+    }
+
+    /// The image angle at corner `m` of triangle `t` and of the triangles seen about that
+    /// corner across `t`'s edges that are not outlines, out to the outline each way (a
+    /// turn where they close round it). A sliver closing a T-junction at its middle corner
+    /// adds a half turn: the side of the long triangle across it, which lacks that corner.
+    fn angle(&self, t: usize, m: usize) -> f64 {
+        let vertex = self.mesh.faces[t][m];
+        let at = |t: usize| {
+            let p = &self.corners[t];
+            let m = self.mesh.faces[t].iter().position(|&v| v == vertex)?;
+            let d = |k: usize| [p[k][0] - p[m][0], p[k][1] - p[m][1]];
+            let (u, v) = (d((m + 1) % 3), d((m + 2) % 3));
+            Some((
+                m,
+                (u[0] * v[1] - u[1] * v[0])
+                    .abs()
+                    .atan2(u[0] * v[0] + u[1] * v[1]),
+            ))
+        };
+        let mut total = at(t).map_or(0.0, |(_, a)| a);
+        // Each way round: out through the edge from the corner to the next one, then the
+        // one to the previous one.
+        for first in [(m + 2) % 3, (m + 1) % 3] {
+            let (mut tri, mut edge) = (t, first);
+            for _ in 0..self.corners.len() {
+                let Some(Some(n)) = self.next(tri, edge) else {
+                    break;
+                };
+                if n == t {
+                    return std::f64::consts::TAU;
+                }
+                let Some((mn, a)) = at(n) else { break };
+                total += a;
+                // Of n's two edges at the corner, the one it did not come in by.
+                let [e1, e2] = [(mn + 1) % 3, (mn + 2) % 3];
+                let came = self.mesh.across[n][e1] as usize == tri;
+                (tri, edge) = (n, if came { e2 } else { e1 });
+            }
+        }
+        total.min(std::f64::consts::TAU)
+    }
+}
+
+/// Twice the projected area (square pixels) under which a triangle is edge-on: invisible
+/// along the view.
+pub const EDGE_ON: f64 = 1e-9;
 
 /// Twice the signed area of (a, b, c) in the image plane (u, v).
 pub fn edge_function(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
@@ -201,6 +371,9 @@ pub struct DepthImage {
     pub height: Vec<f32>,
     /// Index of the triangle seen at each pixel; `u32::MAX` where none.
     pub tri: Vec<u32>,
+    /// The pixels on the outline of the surface seen and the share of each it covers
+    /// ([`outline_coverage`]), by index.
+    pub coverage: Vec<(u32, f32)>,
 }
 
 impl DepthImage {
@@ -215,6 +388,7 @@ impl DepthImage {
             pixel,
             height: vec![fill; window.len()],
             tri: vec![u32::MAX; window.len()],
+            coverage: Vec::new(),
         }
     }
 
@@ -284,6 +458,108 @@ impl<'a> Patch<'a> {
         let k = self.start + r * self.image.window.width;
         &self.image.tri[k..k + self.window.width]
     }
+
+    /// The outline's pixels ([`DepthImage::coverage`]) within the window: each one's row,
+    /// column and the share of it covered.
+    pub fn outline(&self) -> impl Iterator<Item = (usize, usize, f32)> + 'a {
+        let (start, width, image_width) = (self.start, self.window.width, self.image.window.width);
+        let end = start + self.window.height.saturating_sub(1) * image_width + width;
+        let list = &self.image.coverage;
+        let at = |k: usize| list.partition_point(|&(i, _)| (i as usize) < k);
+        let (from, to) = (at(start), at(end));
+        list[from..to.max(from)]
+            .iter()
+            .filter_map(move |&(k, share)| {
+                let k = k as usize - start;
+                let (r, c) = (k / image_width, k % image_width);
+                (c < width).then_some((r, c, share))
+            })
+    }
+
+    /// The share of the pixel in row `r`, column `c` of the window that its surface covers.
+    pub fn coverage(&self, r: usize, c: usize) -> f32 {
+        let k = (self.start + r * self.image.window.width + c) as u32;
+        let list = &self.image.coverage;
+        list.binary_search_by_key(&k, |&(i, _)| i)
+            .map_or(1.0, |i| list[i].1)
+    }
+}
+
+/// Counts each contact pixel of `c` (A's patch `a` on B's patch `b` at shift `s`, contact
+/// `tolerance` as the reduction used, B's triangle normals `b_normals`) on the parts'
+/// outlines by the share of it both cover (A's times B's, [`outline_coverage`]) instead of
+/// whole: its sums lose the rest, [`ContactSummary::deficit`] gains it.
+pub fn weigh_outline(
+    c: &mut ContactSummary,
+    a: Patch<'_>,
+    b: Patch<'_>,
+    b_normals: &[[f32; 3]],
+    s: Shift,
+    tolerance: f32,
+) {
+    if c.rows.is_empty() || (a.image.coverage.is_empty() && b.image.coverage.is_empty()) {
+        return;
+    }
+    let thr = c.gap + tolerance;
+    let (aw, bw) = (a.window(), b.window());
+    // A's row r, column col is B's row r + off_row, column col + off_col.
+    let (off_col, off_row) = (aw.i0 - s.du - bw.i0, aw.j0 - s.dv - bw.j0);
+    debug_assert!(c.rows.is_sorted_by_key(|&(r, _, _)| r));
+    // Whether A's pixel lies between its row's first and last contact.
+    let spanned = |r: usize, col: usize| {
+        (c.rows.binary_search_by_key(&(r as u32), |&(row, _, _)| row))
+            .is_ok_and(|k| (c.rows[k].1 as usize..=c.rows[k].2 as usize).contains(&col))
+    };
+    let in_b = |r: usize, col: usize| {
+        let (br, bc) = (r as i64 + off_row, col as i64 + off_col);
+        (br >= 0 && bc >= 0 && (br as usize) < bw.height && (bc as usize) < bw.width)
+            .then_some((br as usize, bc as usize))
+    };
+    // A's outline pixels, then B's under A that are not A's.
+    let on_a = a.outline().map(|(r, col, share)| (r, col, share, true));
+    let on_b = b.outline().filter_map(|(br, bc, share)| {
+        let (r, col) = (br as i64 - off_row, bc as i64 - off_col);
+        (r >= 0 && col >= 0).then_some((r as usize, col as usize, share, false))
+    });
+    let mut lost = ContactSummary::none(c.gap);
+    for (r, col, share, of_a) in on_a.chain(on_b) {
+        if !spanned(r, col) {
+            continue;
+        }
+        let Some((br, bc)) = in_b(r, col) else {
+            continue;
+        };
+        let both = if of_a {
+            share * b.coverage(br, bc)
+        } else if a.coverage(r, col) < 1.0 {
+            continue;
+        } else {
+            share
+        };
+        let ha = a.heights(r)[col];
+        if ha - b.heights(br)[bc] > thr {
+            continue;
+        }
+        let d = f64::from(1.0 - both);
+        let normal = b_normals
+            .get(b.tris(br)[bc] as usize)
+            .copied()
+            .unwrap_or_default();
+        lost.deficit += d;
+        lost.sum_col += d * col as f64;
+        lost.sum_row += d * r as f64;
+        lost.sum_height += d * f64::from(ha);
+        for (acc, n) in lost.sum_normal.iter_mut().zip(normal) {
+            *acc += d * f64::from(n);
+        }
+    }
+    c.deficit += lost.deficit;
+    c.sum_col -= lost.sum_col;
+    c.sum_row -= lost.sum_row;
+    c.sum_height -= lost.sum_height;
+    for (acc, n) in c.sum_normal.iter_mut().zip(lost.sum_normal) {
+        *acc -= n;
+    }
 }
 
 /// A translation of B across the view, in whole pixels.
@@ -313,6 +589,9 @@ pub struct ContactSummary {
     pub sum_normal: [f64; 3],
     /// Per image row of A with a contact: (row, first contact column, last contact column).
     pub rows: Vec<(u32, u32, u32)>,
+    /// The share of the contact pixels that the parts' outlines leave uncovered
+    /// ([`weigh_outline`]), in pixels; the sums above are of the covered shares.
+    pub deficit: f64,
 }
 
 impl ContactSummary {
@@ -326,7 +605,14 @@ impl ContactSummary {
             sum_height: 0.0,
             sum_normal: [0.0; 3],
             rows: Vec::new(),
+            deficit: 0.0,
         }
+    }
+
+    /// The contact's area in pixels: its pixels, each counted by the share of it the parts
+    /// cover.
+    pub fn area(&self) -> f64 {
+        f64::from(self.count) - self.deficit
     }
 
     /// The region's mean width in pixels: twice its pixel count over the perimeter of its

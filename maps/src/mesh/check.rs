@@ -17,6 +17,12 @@ pub const MIN_EXTENT: f64 = 1e-4;
 /// A triangle whose area is below this share of its longest edge squared covers no area
 /// (its corners are collinear to the precision of the file).
 const SLIVER: f64 = 1e-10;
+/// Whether the triangle with corners `p` covers no area: [`SLIVER`].
+pub fn sliver([a, b, c]: [Point3<f64>; 3]) -> bool {
+    let longest = (b - a).norm().max((c - b).norm()).max((a - c).norm());
+    (b - a).cross(&(c - a)).norm() / 2.0 <= SLIVER * longest * longest
+}
+
 /// Triangles named in a defect's sample.
 const SAMPLE: usize = 5;
 
@@ -114,12 +120,7 @@ pub fn check(vertices: &[Point3<f64>], faces: &[[u32; 3]]) -> (Vec<Defect>, Vec<
     let degenerate: Vec<usize> = kept
         .iter()
         .filter(|(_, f)| {
-            let [a, b, c] = f.map(|v| vertices[v as usize]);
-            let longest = (b - a).norm().max((c - b).norm()).max((a - c).norm());
-            f[0] == f[1]
-                || f[1] == f[2]
-                || f[2] == f[0]
-                || (b - a).cross(&(c - a)).norm() / 2.0 <= SLIVER * longest * longest
+            f[0] == f[1] || f[1] == f[2] || f[2] == f[0] || sliver(f.map(|v| vertices[v as usize]))
         })
         .map(|&(i, _)| i)
         .collect();

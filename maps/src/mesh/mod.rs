@@ -22,6 +22,9 @@ pub struct Mesh {
     pub vertices: Vec<Point3<f64>>,
     /// Triangles as vertex indices, counter-clockwise seen from outside.
     pub faces: Vec<[u32; 3]>,
+    /// Per triangle and edge `k` (corner `k + 1` to corner `k + 2`), the one triangle on
+    /// its other side; [`NO_NEIGHBOUR`] on an open or non-manifold edge.
+    pub across: Vec<[u32; 3]>,
     /// What [`check`] found wrong with the file that does not refuse it.
     pub warnings: Vec<check::Defect>,
 }
@@ -90,6 +93,7 @@ impl Mesh {
         Ok(Self {
             path: path.to_owned(),
             sha256,
+            across: across(&faces),
             vertices,
             faces,
             warnings,
@@ -101,6 +105,7 @@ impl Mesh {
         Self {
             path: PathBuf::from("<memory>"),
             sha256: String::new(),
+            across: across(&faces),
             vertices,
             faces,
             warnings: Vec::new(),
@@ -112,6 +117,12 @@ impl Mesh {
         self.faces[i].map(|v| self.vertices[v as usize])
     }
 
+    /// Whether triangle `i` covers no area ([`check::sliver`]): collinear corners that close
+    /// a T-junction.
+    pub fn is_sliver(&self, i: usize) -> bool {
+        check::sliver(self.triangle(i))
+    }
+
     /// Unit outward normal of triangle `i` from its winding (zero for degenerate ones).
     pub fn normal(&self, i: usize) -> Vector3<f64> {
         let [a, b, c] = self.triangle(i);
@@ -120,6 +131,33 @@ impl Mesh {
             .try_normalize(0.0)
             .unwrap_or_else(Vector3::zeros)
     }
+}
+
+/// [`Mesh::across`]'s value on an edge without exactly one triangle on its other side.
+pub const NO_NEIGHBOUR: u32 = u32::MAX;
+
+/// Per triangle of `faces` and edge `k` (corner `k + 1` to corner `k + 2`), the one triangle
+/// that runs the edge the other way ([`NO_NEIGHBOUR`] where none or several do).
+fn across(faces: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let edge = |f: &[u32; 3], k: usize| (f[(k + 1) % 3], f[(k + 2) % 3]);
+    let mut runs: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for (t, f) in faces.iter().enumerate() {
+        for k in 0..3 {
+            runs.entry(edge(f, k)).or_default().push(t as u32);
+        }
+    }
+    faces
+        .iter()
+        .map(|f| {
+            std::array::from_fn(|k| {
+                let (p, q) = edge(f, k);
+                match (runs.get(&(q, p)).map(Vec::as_slice), runs[&(p, q)].len()) {
+                    (Some(&[t]), 1) => t,
+                    _ => NO_NEIGHBOUR,
+                }
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -137,5 +175,32 @@ mod tests {
         let e = Mesh::load(&bad).unwrap_err();
         assert!(matches!(e, MapError::Mesh { .. }), "{e}");
         std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn each_edge_of_a_closed_mesh_has_the_triangle_that_shares_it_across() {
+        let v = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let faces = vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
+        let m = Mesh::from_parts(v.iter().map(|&c| Point3::from(c)).collect(), faces.clone());
+        for (t, f) in faces.iter().enumerate() {
+            for k in 0..3 {
+                let (p, q) = (f[(k + 1) % 3], f[(k + 2) % 3]);
+                let n = m.across[t][k] as usize;
+                assert_ne!(n, t);
+                let g = faces[n];
+                assert!((0..3).any(|j| (g[j], g[(j + 1) % 3]) == (q, p)), "{t} {k}");
+            }
+        }
+        // One triangle alone: every edge open.
+        let open = Mesh::from_parts(
+            v[..3].iter().map(|&c| Point3::from(c)).collect(),
+            vec![[0, 1, 2]],
+        );
+        assert_eq!(open.across, vec![[NO_NEIGHBOUR; 3]]);
     }
 }

@@ -20,7 +20,8 @@ use wgpu::util::DeviceExt;
 
 use crate::depth::edge_function as edge;
 use crate::depth::{
-    ContactSummary, DepthBackend, DepthImage, RenderJob, Shift, Surface, edge_thresholds, pixel_box,
+    ContactSummary, DepthBackend, DepthImage, EDGE_ON, RenderJob, Shift, Surface, edge_thresholds,
+    outline_coverage, pixel_box,
 };
 use crate::error::{MapError, Result};
 
@@ -279,6 +280,7 @@ impl GpuBackend {
                 self.render_tile(&tris, vertices, &tile, (tx, ty, tw, th), &mut img)?;
             }
         }
+        img.coverage = outline_coverage(job, &img);
         Ok(img)
     }
 
@@ -634,6 +636,7 @@ fn decode(head: &[u32], rows: &[u32], none: &ContactSummary) -> ContactSummary {
             .filter(|(_, fl)| fl[0] != 0)
             .map(|(r, fl)| (r as u32, !fl[0], fl[1] - 1))
             .collect(),
+        deficit: 0.0,
     }
 }
 
@@ -662,17 +665,10 @@ fn triangle_records(job: &RenderJob<'_>) -> (Vec<[f32; TRI_FLOATS]>, f64, f64) {
     let (mut hmin, mut hmax) = (f64::INFINITY, f64::NEG_INFINITY);
     let records = (0..job.mesh.faces.len())
         .map(|t| {
-            let mut p = job.mesh.triangle(t).map(|q| {
-                let c = job.view.project(&(job.pose * q));
-                [
-                    c[0] / job.pixel - job.window.i0 as f64,
-                    c[1] / job.pixel - job.window.j0 as f64,
-                    c[2],
-                ]
-            });
+            let mut p = job.corners(t);
             let mut area = edge(p[0], p[1], p[2]);
             let pixels = pixel_box(&p, job.window.width, job.window.height);
-            let Some(pixels) = pixels.filter(|_| area.abs() >= 1e-9) else {
+            let Some(pixels) = pixels.filter(|_| area.abs() >= EDGE_ON) else {
                 // Edge-on or outside the window, as on the CPU: no fragments.
                 return [0.0; TRI_FLOATS];
             };
