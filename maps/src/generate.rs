@@ -391,9 +391,9 @@ impl Context<'_> {
         let poses = [a_pose, b_pose];
         let fine = Fine::render(self, view, poses, &windows, pixel, refine, &b_normals)?;
         // Filled in place (every shift's slot known beforehand): a collection of unknown
-        // length would grow by copies, a large part of a map's time.
-        // Each thin region reduced again at the finer pixel where it finds a contact there;
-        // the others' outline pixels weighed here ([`weigh_outline`]).
+        // length would grow by copies, a large part of a map's time. Each thin region is
+        // reduced again at the finer pixel where it finds a contact there; the others'
+        // outline pixels are weighed here ([`weigh_outline`]).
         let mut contacts: Vec<(ContactSummary, WrenchSetup)> =
             summaries.into_iter().map(|c| (c, setup)).collect();
         let (a_whole, b_whole) = (a_img.whole(), b_img.whole());
@@ -562,8 +562,8 @@ impl<'a> Fine<'a> {
     }
 
     /// The contact of B at `shift` again at the finer pixel over its `windows` (its outline
-    /// pixels weighed, [`weigh_outline`]), with the setup of that finer image (`coarse`:
-    /// the coarse one's); `None` where the finer images find no contact.
+    /// pixels weighed, [`weigh_outline`]), with the setup of that finer image, made from
+    /// the coarse image's `coarse`; `None` where the finer images find no contact.
     fn contact(
         &self,
         shift: Shift,
