@@ -67,7 +67,7 @@ impl DepthBackend for CpuBackend {
                 }
             }
         }
-        img.coverage = outline_coverage(job, &img);
+        outline_coverage(job, &mut img);
         Ok(img)
     }
 

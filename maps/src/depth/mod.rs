@@ -200,7 +200,8 @@ pub fn pixel_box(p: &[[f64; 3]; 3], width: usize, height: usize) -> Option<[i64;
     (x0 <= x1 && y0 <= y1).then_some([x0, x1, y0, y1])
 }
 
-/// Per pixel whose centre lies on the outline of the surface `img` sees (on an edge of the
+/// Writes into `img` ([`DepthImage::coverage`]), per pixel whose centre lies on the outline
+/// of the surface it sees (on an edge of the
 /// triangle seen there, within the coverage rule's distance, whose neighbour across it is
 /// not seen from the same side: a wall edge-on, or a face turned away), the share of the
 /// pixel that surface covers: 1/2 on an edge; at a corner, the angle of the triangles seen
@@ -209,7 +210,7 @@ pub fn pixel_box(p: &[[f64; 3]; 3], width: usize, height: usize) -> Option<[i64;
 /// dimensions on a lattice of round pixels), which the coverage rule samples a pixel
 /// wider, counts as wide as it is. Open and non-manifold edges, and those beside a sliver
 /// that closes a T-junction, are not outlines.
-pub fn outline_coverage(job: &RenderJob<'_>, img: &DepthImage) -> Vec<(u32, f32)> {
+pub fn outline_coverage(job: &RenderJob<'_>, img: &mut DepthImage) {
     let (width, height) = (job.window.width as i64, job.window.height as i64);
     let fan = Fan::of(job);
     // The pixels whose centre lies on an outline edge of the triangle seen there.
@@ -238,7 +239,8 @@ pub fn outline_coverage(job: &RenderJob<'_>, img: &DepthImage) -> Vec<(u32, f32)
             }
         }
     }
-    on.into_iter()
+    img.coverage = on
+        .into_iter()
         .map(|(idx, t)| {
             let q = [
                 (idx as i64 % width) as f64,
@@ -253,7 +255,11 @@ pub fn outline_coverage(job: &RenderJob<'_>, img: &DepthImage) -> Vec<(u32, f32)
             };
             (idx, share as f32)
         })
-        .collect()
+        .collect();
+    let list = &img.coverage;
+    img.coverage_rows = (0..=height as usize)
+        .map(|r| list.partition_point(|&(i, _)| (i as usize) < r * width as usize) as u32)
+        .collect();
 }
 
 /// A mesh's triangles as a render job sees them, for [`outline_coverage`].
@@ -374,6 +380,8 @@ pub struct DepthImage {
     /// The pixels on the outline of the surface seen and the share of each it covers
     /// ([`outline_coverage`]), by index.
     pub coverage: Vec<(u32, f32)>,
+    /// Per image row and one more, where its pixels start in `coverage`.
+    pub coverage_rows: Vec<u32>,
 }
 
 impl DepthImage {
@@ -389,6 +397,7 @@ impl DepthImage {
             height: vec![fill; window.len()],
             tri: vec![u32::MAX; window.len()],
             coverage: Vec::new(),
+            coverage_rows: vec![0; window.height + 1],
         }
     }
 
@@ -459,29 +468,73 @@ impl<'a> Patch<'a> {
         &self.image.tri[k..k + self.window.width]
     }
 
-    /// The outline's pixels ([`DepthImage::coverage`]) within the window: each one's row,
-    /// column and the share of it covered.
-    pub fn outline(&self) -> impl Iterator<Item = (usize, usize, f32)> + 'a {
-        let (start, width, image_width) = (self.start, self.window.width, self.image.window.width);
-        let end = start + self.window.height.saturating_sub(1) * image_width + width;
-        let list = &self.image.coverage;
-        let at = |k: usize| list.partition_point(|&(i, _)| (i as usize) < k);
-        let (from, to) = (at(start), at(end));
-        list[from..to.max(from)]
-            .iter()
-            .filter_map(move |&(k, share)| {
-                let k = k as usize - start;
-                let (r, c) = (k / image_width, k % image_width);
-                (c < width).then_some((r, c, share))
-            })
+    /// The outline's pixels ([`DepthImage::coverage`]) of the window's rows `rows`, with
+    /// those of the image's columns beside the window on them.
+    fn outline_rows(&self, rows: std::ops::Range<usize>) -> &'a [(u32, f32)] {
+        let first = self.start / self.image.window.width;
+        let at = |r: usize| self.image.coverage_rows[first + r] as usize;
+        &self.image.coverage[at(rows.start)..at(rows.end)]
+    }
+
+    /// The window's row and column of the image's pixel `k`, where it lies in the window.
+    fn place(&self, k: u32) -> Option<[usize; 2]> {
+        let k = (k as usize).checked_sub(self.start)?;
+        let (r, c) = (k / self.image.window.width, k % self.image.window.width);
+        (r < self.window.height && c < self.window.width).then_some([r, c])
+    }
+
+    /// Calls `f` with the row, column and covered share of each outline pixel of the window
+    /// that lies in the span of one of `rows` (row, first and last column, of a window
+    /// whose row and column 0 lie at `off` in this one), in that window's rows and columns:
+    /// through the outline's list where it is shorter than `rows`, row by row otherwise.
+    fn outline_under(
+        &self,
+        rows: &[(u32, u32, u32)],
+        off: [i64; 2],
+        mut f: impl FnMut(usize, usize, f32),
+    ) {
+        let (height, width) = (self.window.height, self.window.width);
+        let all = self.outline_rows(0..height);
+        let back = |[r, c]: [usize; 2]| {
+            let (r, c) = (r as i64 - off[0], c as i64 - off[1]);
+            (r >= 0 && c >= 0).then_some([r as usize, c as usize])
+        };
+        if all.len() <= rows.len() {
+            for &(k, share) in all {
+                let Some([r, c]) = self.place(k).and_then(back) else {
+                    continue;
+                };
+                let k = rows.partition_point(|&(row, _, _)| (row as usize) < r);
+                if rows.get(k).is_some_and(|&(row, first, last)| {
+                    row as usize == r && (first as usize..=last as usize).contains(&c)
+                }) {
+                    f(r, c, share);
+                }
+            }
+            return;
+        }
+        for &(row, first, last) in rows {
+            let pr = i64::from(row) + off[0];
+            let (c0, c1) = (i64::from(first) + off[1], i64::from(last) + off[1]);
+            if pr < 0 || pr as usize >= height || c1 < 0 || c0 >= width as i64 {
+                continue;
+            }
+            let span = c0.max(0) as usize..=(c1 as usize).min(width - 1);
+            let pr = pr as usize;
+            for &(k, share) in self.outline_rows(pr..pr + 1) {
+                if let Some([_, c]) = self.place(k).filter(|[_, c]| span.contains(c)) {
+                    f(row as usize, (c as i64 - off[1]) as usize, share);
+                }
+            }
+        }
     }
 
     /// The share of the pixel in row `r`, column `c` of the window that its surface covers.
     pub fn coverage(&self, r: usize, c: usize) -> f32 {
         let k = (self.start + r * self.image.window.width + c) as u32;
-        let list = &self.image.coverage;
-        list.binary_search_by_key(&k, |&(i, _)| i)
-            .map_or(1.0, |i| list[i].1)
+        let row = self.outline_rows(r..r + 1);
+        row.binary_search_by_key(&k, |&(i, _)| i)
+            .map_or(1.0, |i| row[i].1)
     }
 }
 
@@ -502,43 +555,26 @@ pub fn weigh_outline(
     }
     let thr = c.gap + tolerance;
     let (aw, bw) = (a.window(), b.window());
-    // A's row r, column col is B's row r + off_row, column col + off_col.
-    let (off_col, off_row) = (aw.i0 - s.du - bw.i0, aw.j0 - s.dv - bw.j0);
+    // A's row r, column col is B's row r + off[0], column col + off[1].
+    let off = [aw.j0 - s.dv - bw.j0, aw.i0 - s.du - bw.i0];
     debug_assert!(c.rows.is_sorted_by_key(|&(r, _, _)| r));
-    // Whether A's pixel lies between its row's first and last contact.
-    let spanned = |r: usize, col: usize| {
-        (c.rows.binary_search_by_key(&(r as u32), |&(row, _, _)| row))
-            .is_ok_and(|k| (c.rows[k].1 as usize..=c.rows[k].2 as usize).contains(&col))
-    };
-    let in_b = |r: usize, col: usize| {
-        let (br, bc) = (r as i64 + off_row, col as i64 + off_col);
-        (br >= 0 && bc >= 0 && (br as usize) < bw.height && (bc as usize) < bw.width)
-            .then_some((br as usize, bc as usize))
-    };
-    // A's outline pixels, then B's under A that are not A's.
-    let on_a = a.outline().map(|(r, col, share)| (r, col, share, true));
-    let on_b = b.outline().filter_map(|(br, bc, share)| {
-        let (r, col) = (br as i64 - off_row, bc as i64 - off_col);
-        (r >= 0 && col >= 0).then_some((r as usize, col as usize, share, false))
-    });
     let mut lost = ContactSummary::none(c.gap);
-    for (r, col, share, of_a) in on_a.chain(on_b) {
-        if !spanned(r, col) {
-            continue;
+    let mut weigh = |r: usize, col: usize, share: f32, of_a: bool| {
+        let (br, bc) = (r as i64 + off[0], col as i64 + off[1]);
+        if br < 0 || bc < 0 || br as usize >= bw.height || bc as usize >= bw.width {
+            return;
         }
-        let Some((br, bc)) = in_b(r, col) else {
-            continue;
-        };
+        let (br, bc) = (br as usize, bc as usize);
         let both = if of_a {
             share * b.coverage(br, bc)
         } else if a.coverage(r, col) < 1.0 {
-            continue;
+            return;
         } else {
             share
         };
         let ha = a.heights(r)[col];
         if ha - b.heights(br)[bc] > thr {
-            continue;
+            return;
         }
         let d = f64::from(1.0 - both);
         let normal = b_normals
@@ -552,7 +588,10 @@ pub fn weigh_outline(
         for (acc, n) in lost.sum_normal.iter_mut().zip(normal) {
             *acc += d * f64::from(n);
         }
-    }
+    };
+    // A's outline pixels in its contact rows' spans, then B's there that are not A's.
+    a.outline_under(&c.rows, [0, 0], |r, col, share| weigh(r, col, share, true));
+    b.outline_under(&c.rows, off, |r, col, share| weigh(r, col, share, false));
     c.deficit += lost.deficit;
     c.sum_col -= lost.sum_col;
     c.sum_row -= lost.sum_row;

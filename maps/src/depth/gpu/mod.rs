@@ -280,7 +280,7 @@ impl GpuBackend {
                 self.render_tile(&tris, vertices, &tile, (tx, ty, tw, th), &mut img)?;
             }
         }
-        img.coverage = outline_coverage(job, &img);
+        outline_coverage(job, &mut img);
         Ok(img)
     }
 
