@@ -86,6 +86,16 @@ pub struct CellCheck {
     /// [`View::along`] its approach; the region within `threshold` of touching), or the
     /// closest points' where no ray meets it.
     pub centroid: Option<[f64; 2]>,
+    /// Where the map's wrench puts the lever across the approach (m, the frame of
+    /// `centroid`): its line of action at the exact region's mean height; `None` where
+    /// there is no centroid to compare with.
+    pub lever: Option<[f64; 2]>,
+    /// Where the lever misses by more than a pixel on tilted parts: how far the exact
+    /// centroid moves (m) when the threshold moves by half the pixel's climb across the
+    /// tilt (`sampling` / 2), the most the map's pixel centres can shift the region's edge
+    /// in gap. Larger than a pixel: the region is in pieces or a tip, whose centroid the
+    /// threshold does not fix to a pixel.
+    pub spread: Option<f64>,
 }
 
 /// The checked cells and the bounds they are held to.
@@ -108,6 +118,20 @@ impl Verification {
             .iter()
             .filter(|c| c.depth_error.abs() <= self.tolerance + c.sampling);
         within.count() as f64 / self.checks.len().max(1) as f64
+    }
+
+    /// The cells whose lever point misses the exact centroid by more than a pixel, and how
+    /// many of them have a centroid that the threshold does not fix to a pixel
+    /// ([`CellCheck::spread`]).
+    pub fn centroid_misses(&self) -> (usize, usize) {
+        let misses = self
+            .checks
+            .iter()
+            .filter(|c| c.centroid_error.is_some_and(|e| e > self.pixel));
+        let unsettled = misses
+            .clone()
+            .filter(|c| c.spread.is_some_and(|s| s > self.pixel));
+        (misses.count(), unsettled.count())
     }
 
     /// Share of the cells with a centroid check whose lever point is within a pixel of the
@@ -297,33 +321,39 @@ impl<'a> Parts<'a> {
         // A contact that no ray along the approach meets (an edge on a wall) is a point,
         // where parry's closest points put it. A face tilted against another is searched
         // for where it rests on its rim.
-        let region = self
-            .centroid
-            .then(|| {
-                let phase = Xoshiro256PlusPlus::seed_from_u64(seed ^ (cell as u64).rotate_left(32));
-                self.region(
-                    &view,
-                    &b_pose,
-                    [rise, threshold],
-                    tilt.tan(),
-                    phase,
-                    [a_range, b_range],
-                )
-            })
-            .flatten();
-        let centroid_error = self.centroid.then(|| {
-            let Some((centroid, height)) = region else {
-                return f64::INFINITY;
-            };
+        let phase = Xoshiro256PlusPlus::seed_from_u64(seed ^ (cell as u64).rotate_left(32));
+        let region_within = |threshold: f64| {
+            let (bounds, ranges) = ([rise, threshold], [a_range, b_range]);
+            self.region(&view, &b_pose, bounds, tilt.tan(), phase.clone(), ranges)
+        };
+        let region = self.centroid.then(|| region_within(threshold)).flatten();
+        let lever = region.map(|(_, height)| {
             let force = r1.inverse() * Vector3::new(values[0], values[1], values[2]).cast::<f64>();
             let torque = r1.inverse() * Vector3::new(values[3], values[4], values[5]).cast::<f64>();
             let sensor = r1.inverse() * (Vector3::from(self.task.contact.sensor_origin) - t_grip);
             // The wrench's line of action, at the contact's height along w.
             let nearest = sensor + force.cross(&torque) / force.norm_squared();
             let along = (height - nearest.dot(&view.w)) / force.dot(&view.w);
-            let lever = view.project(&Point3::from(nearest + force * along));
-            (lever[0] - centroid[0]).hypot(lever[1] - centroid[1])
+            let [u, v, _] = view.project(&Point3::from(nearest + force * along));
+            [u, v]
         });
+        let centroid_error = self.centroid.then(|| match (region, lever) {
+            (Some(([u, v], _)), Some([lu, lv])) => (lu - u).hypot(lv - v),
+            _ => f64::INFINITY,
+        });
+        // Where the lever misses, how far the exact centroid moves as the threshold moves by
+        // half a pixel's climb across the tilt (how far the map's pixel centres may put the
+        // region's edge, in gap).
+        let climb = 0.5 * sampling;
+        let spread = (centroid_error.is_some_and(|e| e > self.task.depth.pixel) && climb > 0.0)
+            .then(|| {
+                let [u, v] = region?.0;
+                let moved = [threshold - climb, threshold + climb].map(|t| {
+                    region_within(t.max(0.0)).map_or(0.0, |([x, y], _)| (x - u).hypot(y - v))
+                });
+                Some(moved[0].max(moved[1]))
+            })
+            .flatten();
         Ok(CellCheck {
             cell,
             coords,
@@ -332,6 +362,8 @@ impl<'a> Parts<'a> {
             threshold,
             centroid_error,
             centroid: region.map(|(c, _)| c),
+            lever,
+            spread,
         })
     }
 

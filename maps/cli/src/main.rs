@@ -162,6 +162,10 @@ enum Cmd {
         /// How many of the cells farthest out of bounds to list.
         #[arg(long, default_value_t = 5)]
         worst: usize,
+        /// Check these cells (flat indices, as `--worst` lists them) instead of a sample,
+        /// and print each one's exact contact and the map's lever point.
+        #[arg(long = "cell", value_name = "CELL")]
+        cells: Vec<usize>,
     },
     /// Makes tasks from a user's meshes.
     Task {
@@ -307,7 +311,8 @@ fn main() -> Result<()> {
             samples,
             seed,
             worst,
-        } => cmd_verify(&file, task.as_deref(), samples, seed, worst),
+            cells,
+        } => cmd_verify(&file, task.as_deref(), samples, seed, worst, &cells),
     }
 }
 
@@ -345,6 +350,7 @@ fn cmd_verify(
     samples: usize,
     seed: u64,
     worst: usize,
+    cells: &[usize],
 ) -> Result<()> {
     let map = format::load(file)?;
     let beside = file.with_file_name("task.toml");
@@ -355,12 +361,19 @@ fn cmd_verify(
     };
     let (mesh_a, mesh_b) = (load_part(&task.part_a)?, load_part(&task.part_b)?);
     let start = Instant::now();
-    let v = ftmap::verify::verify(
-        &map,
-        &task,
-        [&mesh_a, &mesh_b],
-        ftmap::verify::VerifyOptions { samples, seed },
-    )?;
+    if let Some(&c) = cells.iter().find(|&&c| c >= map.grid().cells()) {
+        bail!(
+            "cell {c} is not in the map: it has {} cells",
+            map.grid().cells()
+        );
+    }
+    let meshes = [&mesh_a, &mesh_b];
+    let v = if cells.is_empty() {
+        let opts = ftmap::verify::VerifyOptions { samples, seed };
+        ftmap::verify::verify(&map, &task, meshes, opts)?
+    } else {
+        ftmap::verify::verify_cells(&map, &task, meshes, cells, seed)?
+    };
     let qs = [0.5, 0.99, 0.999, 1.0];
     let um = |xs: Vec<f64>| {
         xs.iter()
@@ -393,25 +406,58 @@ fn cmd_verify(
             map.meta().model
         ),
     }
-    for c in v.worst(worst) {
-        let coords: Vec<String> = map
-            .grid()
-            .axes()
-            .iter()
-            .zip(&c.coords)
+    let (misses, unsettled) = v.centroid_misses();
+    if misses > 0 {
+        println!(
+            "misses    {misses} cells over a pixel; {unsettled} of them ill-conditioned: their exact centroid moves more than a pixel when the threshold moves by half a pixel's climb across the tilt (a region in pieces, a tip)"
+        );
+    }
+    let spread = |c: &ftmap::verify::CellCheck| {
+        c.spread.map_or(String::new(), |s| {
+            format!(
+                "; the centroid moves {:.2} um within half a pixel's climb",
+                s * 1e6
+            )
+        })
+    };
+    let coords = |c: &ftmap::verify::CellCheck| -> String {
+        let axes = map.grid().axes().iter().zip(&c.coords);
+        let named: Vec<String> = axes
             .map(|(a, x)| format!("{}={}", a.dof, a.dof.display(*x)))
             .collect();
+        named.join(" ")
+    };
+    let mm = |p: Option<[f64; 2]>| {
+        p.map_or("-".into(), |[u, v]| {
+            format!("({:+.4}, {:+.4}) mm", u * 1e3, v * 1e3)
+        })
+    };
+    for c in v.checks.iter().filter(|_| !cells.is_empty()) {
         println!(
-            "worst     cell {} ({}): depth error {:.2} um, centroid error {}",
+            "cell      {} ({}): depth error {:.2} um (allowed {:.2}); region within {:.2} um of touching: centroid {}, the map's lever {}{}",
             c.cell,
-            coords.join(" "),
+            coords(c),
+            c.depth_error * 1e6,
+            (v.tolerance + c.sampling) * 1e6,
+            c.threshold * 1e6,
+            mm(c.centroid),
+            mm(c.lever),
+            spread(c)
+        );
+    }
+    for c in v.worst(worst) {
+        println!(
+            "worst     cell {} ({}): depth error {:.2} um, centroid error {}{}",
+            c.cell,
+            coords(c),
             c.depth_error * 1e6,
             match c.centroid_error {
                 None => "-".into(),
                 Some(e) if e.is_infinite() =>
                     "none: neither the rays along the approach nor the closest points find the contact".into(),
                 Some(e) => format!("{:.2} um", e * 1e6),
-            }
+            },
+            spread(c)
         );
     }
     if !v.passes() {
