@@ -1,8 +1,6 @@
 //! The CPU depth backend, the reference: a scan-converting orthographic z-buffer
 //! rasterizer and the shifted-difference contact reduction, parallel with rayon.
 
-use std::sync::OnceLock;
-
 use rayon::prelude::*;
 use wide::f32x8;
 
@@ -97,7 +95,7 @@ impl DepthBackend for CpuBackend {
             spans: RowSpans::of(a),
             whole: WholeRows::of(a, b, b_normals),
             solid: solid_rows(a),
-            normals: Normals::of(b, b_normals),
+            b_normals,
             runs: Runs::of(b),
         };
         let ranges = RowRanges::of(b, &rows.solid);
@@ -249,34 +247,34 @@ struct RowSums {
     last: f32,
 }
 
+/// B's normal (u, v, w) at a pixel that sees triangle `t` of B's `normals` (zero where it
+/// sees none).
+fn normal_of(normals: &[[f32; 3]], t: u32) -> [f32; 3] {
+    normals.get(t as usize).copied().unwrap_or_default()
+}
+
 /// Contacts of one row: pixels k with `a[k] - b[k] <= thr`; columns counted from `col0`.
-/// Masks are applied bitwise, so empty pixels (infinite heights) never make a NaN.
-/// Without `SUMS` the height and normal sums are left 0 (the caller knows them: flat A
-/// row, one B normal), and the normals `n` are not read.
-fn row_sums<const SUMS: bool>(
+/// Masks are applied bitwise, so empty pixels (infinite heights) never make a NaN. With
+/// `normal` (B's normal at pixel k), the height and normal sums too, over the lanes between
+/// the first and the last contact alone (the others add zeros: the same sums); without,
+/// they are left 0 (the caller knows them: flat A row, one B normal).
+fn row_sums(
     a: &[f32],
     b: &[f32],
-    n: [&[f32]; 3],
+    normal: Option<&dyn Fn(usize) -> [f32; 3]>,
     thr: f32,
     col0: f32,
 ) -> RowSums {
     let full = a.len() - a.len() % 8;
     let (thr8, one, zero) = (f32x8::splat(thr), f32x8::splat(1.0), f32x8::ZERO);
-    let (mut cnt, mut sc, mut sh) = (zero, zero, zero);
-    let mut sn = [zero; 3];
+    let hit = |k: usize| (lanes(a, k) - lanes(b, k)).simd_le(thr8);
+    let (mut cnt, mut sc) = (zero, zero);
     let (mut first, mut last) = (f32x8::splat(f32::INFINITY), f32x8::splat(f32::NEG_INFINITY));
     let mut col = f32x8::from([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]) + f32x8::splat(col0);
     for k in (0..full).step_by(8) {
-        let av = lanes(a, k);
-        let hit = (av - lanes(b, k)).simd_le(thr8);
+        let hit = hit(k);
         cnt += hit & one;
         sc += hit & col;
-        if SUMS {
-            sh += hit & av;
-            for (acc, nn) in sn.iter_mut().zip(&n) {
-                *acc += hit & lanes(nn, k);
-            }
-        }
         first = hit.bitselect(first.fast_min(col), first);
         last = hit.bitselect(last.fast_max(col), last);
         col += f32x8::splat(8.0);
@@ -284,23 +282,37 @@ fn row_sums<const SUMS: bool>(
     let mut out = RowSums {
         count: cnt.reduce_add(),
         sum_col: sc.reduce_add(),
-        sum_height: sh.reduce_add(),
-        normal: sn.map(|v| v.reduce_add()),
+        sum_height: 0.0,
+        normal: [0.0; 3],
         first: first.to_array().into_iter().fold(f32::INFINITY, f32::min),
         last: last
             .to_array()
             .into_iter()
             .fold(f32::NEG_INFINITY, f32::max),
     };
+    if let Some(normal) = normal.filter(|_| out.first.is_finite()) {
+        let (k0, k1) = ((out.first - col0) as usize, (out.last - col0) as usize);
+        let (mut sh, mut sn) = (zero, [zero; 3]);
+        for k in (k0 - k0 % 8..=k1).step_by(8) {
+            let (hit, av) = (hit(k), lanes(a, k));
+            sh += hit & av;
+            let n: [[f32; 3]; 8] = std::array::from_fn(|j| normal(k + j));
+            for (c, acc) in sn.iter_mut().enumerate() {
+                *acc += hit & f32x8::from(n.map(|v| v[c]));
+            }
+        }
+        out.sum_height = sh.reduce_add();
+        out.normal = sn.map(|v| v.reduce_add());
+    }
     for k in full..a.len() {
         if a[k] - b[k] <= thr {
             let col = col0 + k as f32;
             out.count += 1.0;
             out.sum_col += col;
-            if SUMS {
+            if let Some(normal) = normal {
                 out.sum_height += a[k];
-                for (o, nn) in out.normal.iter_mut().zip(&n) {
-                    *o += nn[k];
+                for (o, n) in out.normal.iter_mut().zip(normal(k)) {
+                    *o += n;
                 }
             }
             out.first = out.first.min(col);
@@ -370,38 +382,6 @@ fn run_sums(h: f32, b: &[f32], ends: &[u32], bcol: usize, thr: f32, col0: usize)
         normal: [0.0; 3],
         first,
         last,
-    }
-}
-
-/// B's contact normals per pixel, built where a row's pixels are summed one by one.
-struct Normals<'b> {
-    /// B's triangle per pixel.
-    tri: &'b [u32],
-    /// The triangles' normals.
-    bn: &'b [[f32; 3]],
-    /// B's normal per pixel, one image per component (zero where B has no surface).
-    comp: OnceLock<[Vec<f32>; 3]>,
-}
-
-impl<'b> Normals<'b> {
-    fn of(b: &'b DepthImage, bn: &'b [[f32; 3]]) -> Self {
-        Self {
-            tri: &b.tri,
-            bn,
-            comp: OnceLock::new(),
-        }
-    }
-
-    /// B's normal per pixel, one image per component.
-    fn comp(&self) -> &[Vec<f32>; 3] {
-        self.comp.get_or_init(|| {
-            let comp = |c: usize| {
-                (self.tri.iter())
-                    .map(|&t| self.bn.get(t as usize).map_or(0.0, |n| n[c]))
-                    .collect()
-            };
-            [comp(0), comp(1), comp(2)]
-        })
     }
 }
 
@@ -551,7 +531,8 @@ struct Rows<'b> {
     /// A's flat rows and B's rows of one normal.
     whole: WholeRows,
     solid: Vec<Option<Solid>>,
-    normals: Normals<'b>,
+    /// B's triangle normals.
+    b_normals: &'b [[f32; 3]],
     /// B's runs.
     runs: Runs,
 }
@@ -703,7 +684,7 @@ fn summarize(
         let n = p.c1 - p.c0 + 1;
         let bs = p.brow_start;
         let (av, bv) = (&a.height[p.r * w + p.c0..][..n], &b.height[bs..bs + n]);
-        let nv = || rows.normals.comp().each_ref().map(|c| &c[bs..bs + n]);
+        let normal = |k: usize| normal_of(rows.b_normals, b.tri[bs + k]);
         let brow = bs / bw;
         let uniform = (rows.whole.flat[p.r], rows.whole.uniform[brow]);
         let r = match (uniform, rows.solid[p.r]) {
@@ -733,13 +714,13 @@ fn summarize(
                         let ends = &runs.end[at.clone()];
                         run_sums(h, &b.height[at], ends, bcol, thr, lo)
                     }
-                    _ => row_sums::<false>(av, bv, [&[]; 3], thr, p.c0 as f32),
+                    _ => row_sums(av, bv, None, thr, p.c0 as f32),
                 };
                 r.sum_height = r.count * h;
                 r.normal = normal.map(|c| c * r.count);
                 r
             }
-            _ => row_sums::<true>(av, bv, nv(), thr, p.c0 as f32),
+            _ => row_sums(av, bv, Some(&normal), thr, p.c0 as f32),
         };
         add_row(&mut out, p.r, &r);
     }
@@ -791,8 +772,6 @@ impl WholeRows {
 pub(crate) struct InPlace {
     /// Each row of A over B: its row, B's row under it and its least gap.
     rows: Vec<(usize, usize, f32)>,
-    /// B's normals along a row in contact, per component (u, v, w).
-    normals: [Vec<f32>; 3],
 }
 
 /// The contact summary of `a` against `b` (normals `b_normals`) under the one shift `s`,
@@ -822,7 +801,7 @@ pub(crate) fn contact_in_place(
         .then(|| clip(Some((0, aw.width - 1)), off_col, bw.width))
         .flatten();
     // Each row of A over B: its row of B and its least gap.
-    let InPlace { rows, normals } = scratch;
+    let rows = &mut scratch.rows;
     rows.clear();
     rows.extend((0..aw.height).filter_map(|r| {
         let br = usize::try_from(r as i64 + off_row).ok()?;
@@ -850,19 +829,20 @@ pub(crate) fn contact_in_place(
         let uniform = whole.uniform[b.image_row(br)].or_else(|| uniform_normal(tris, b_normals));
         let sums = match (flat, uniform) {
             (Some(h), Some(normal)) => {
-                let mut sums = row_sums::<false>(av, bv, [&[]; 3], thr, c0 as f32);
+                let mut sums = row_sums(av, bv, None, thr, c0 as f32);
                 sums.sum_height = sums.count * h;
                 sums.normal = normal.map(|c| c * sums.count);
                 sums
             }
             _ => {
-                for (k, n) in normals.iter_mut().enumerate() {
-                    n.clear();
-                    let seen = tris[bcols((c0, c1))].iter();
-                    n.extend(seen.map(|&t| b_normals.get(t as usize).map_or(0.0, |n| n[k])));
-                }
-                let nv = normals.each_ref().map(Vec::as_slice);
-                row_sums::<true>(av, bv, nv, thr, c0 as f32)
+                let seen = &tris[bcols((c0, c1))];
+                row_sums(
+                    av,
+                    bv,
+                    Some(&|k| normal_of(b_normals, seen[k])),
+                    thr,
+                    c0 as f32,
+                )
             }
         };
         add_row(&mut out, r, &sums);
@@ -1134,7 +1114,6 @@ mod tests {
         let runs = Runs::of(&b);
         assert_eq!(runs.few, [true, true, true, false]);
         let h = 5e-3;
-        let zeros = vec![0.0; width];
         let (mut partial, mut windows) = (0, 0);
         for r in 0..height {
             for thr in [1e-3, 2e-3, 3.5e-3, 6e-3] {
@@ -1146,9 +1125,8 @@ mod tests {
                         let at = r * width + start..r * width + start + len;
                         let (bv, ends) = (&b.height[at.clone()], &runs.end[at]);
                         let by_runs = run_sums(h, bv, ends, start, thr, start + 3);
-                        let nv = [&zeros[..len], &zeros[..len], &zeros[..len]];
                         let av = vec![h; len];
-                        let by_pixels = row_sums::<false>(&av, bv, nv, thr, (start + 3) as f32);
+                        let by_pixels = row_sums(&av, bv, None, thr, (start + 3) as f32);
                         let sums = |s: &RowSums| (s.count, s.sum_col, s.first, s.last);
                         assert_eq!(
                             sums(&by_runs),
