@@ -18,18 +18,8 @@ use std::path::Path;
 use ftmap::task::omega::MAX_AXES;
 use ftmap::{Axis, Dof, FtMap, NCH, Pose};
 
+use super::weights::{BATCH, Batch, CONTACT, LANES, TERMS, Weights};
 use crate::error::{FusionError, Result};
-
-/// Channels per padded cell: fx fy fz tx ty tz depth, contact (1) or inserted (0).
-pub const LANES: usize = 8;
-/// Mismatch terms per cell: the squared slopes of the force and of the torque ([`slopes`]),
-/// then the variances of their multilinear interpolation error ([`interpolation_errors`]);
-/// each the mean over the vector's x and y components, across the tool's axis.
-const TERMS: usize = 4;
-/// The first of the interpolation-error terms.
-const INTERPOLATION: usize = 2;
-/// The lane that flags a contact cell.
-const CONTACT: usize = LANES - 1;
 
 /// One axis of the map in the filter's terms.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -212,7 +202,7 @@ impl Tilts {
     ) -> bool {
         let theta: [f32; 2] =
             std::array::from_fn(|j| self.min[j] + raw[self.axes[j]] * self.step[j]);
-        let size = theta[0].hypot(theta[1]);
+        let size = (theta[0] * theta[0] + theta[1] * theta[1]).sqrt();
         if size == 0.0 {
             return false;
         }
@@ -270,126 +260,6 @@ struct Params<const D: usize> {
     lo_max: [usize; D],
     stride: [usize; D],
     up: [usize; D],
-}
-
-/// How a predicted cell is weighed against a measurement (Eq. 3 in log space): each
-/// channel's residual squared times its inverse variance, plus, for the force and torque
-/// vectors, `along` times the square of the residual's component along `axis` (the measured
-/// vector's direction), so that the map may miss a vector's magnitude by more (or less)
-/// than its direction. Where the map may miss the contact's position (`position`), the x
-/// and y components of the force and the torque (across the tool's axis, where a contact
-/// displaced across it moves them) get that much more variance per unit of their squared
-/// slope at the particle, and the likelihood its normalisation (a particle on a steep slope
-/// explains a wide range of measurements, each less well). The multilinear lookup's own
-/// error, large where the field bends within a cell (round the hole, where the rim torque
-/// turns), adds its variance to the same components (`interpolation`).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Weights {
-    /// Measured channels, padded.
-    pub meas: [f32; LANES],
-    /// Inverse variances of the channels (0: unused).
-    pub inv_var: [f32; LANES],
-    /// Unit direction of the measured force and torque (zero: none).
-    pub axis: [[f32; 3]; 2],
-    /// Extra inverse variance along each `axis`.
-    pub along: [f32; 2],
-    /// Variance added to the force's and torque's x and y components per unit of their
-    /// squared slope (m^2: the square of the position the map may miss, in each axis across
-    /// the approach), for the force and the torque.
-    pub position: [f32; 2],
-    /// Share of the lookup's interpolation-error variance ([`interpolation_errors`]) that
-    /// counts, for the force and the torque: the `mismatch_interpolation` parameter for the
-    /// multilinear lookup, 0 for the nearest cell (whose error, that share of the cell's
-    /// width, is in `position`).
-    pub interpolation: [f32; 2],
-    /// Degrees of freedom of a Student-t likelihood over the channels used; 0: Gaussian.
-    pub tail: f32,
-    /// Relative tilt (rad) below which the force and torque are read where the tilt's
-    /// direction meets this radius ([`Tilts`]); 0: where the particle lies.
-    pub tilt_floor: f32,
-    /// The channels used (inverse variance above 0), counted once by [`Weights::student`].
-    pub(crate) channels: f32,
-}
-
-impl Weights {
-    /// Weights of `meas` with inverse variances `inv_var` alone (no direction term).
-    pub fn diagonal(meas: [f32; LANES], inv_var: [f32; LANES]) -> Self {
-        Self {
-            meas,
-            inv_var,
-            ..Self::default()
-        }
-    }
-
-    /// These weights with a Student-t likelihood of `tail` degrees of freedom (0: Gaussian)
-    /// over the channels `inv_var` uses.
-    pub fn student(self, tail: f32) -> Self {
-        Self {
-            tail,
-            channels: self.inv_var.iter().filter(|v| **v > 0.0).count() as f32,
-            ..self
-        }
-    }
-
-    /// Log-likelihood of the predicted channels `pred`, whose force and torque have the
-    /// mismatch terms `terms` ([`TERMS`]; constants of the measurement dropped: 0 for a
-    /// perfect prediction without them). The contact lane's inverse variance is 0.
-    #[inline(always)]
-    fn log_likelihood(&self, pred: &[f32; LANES], terms: &[f32; TERMS]) -> f32 {
-        let mut chi2 = 0.0;
-        // How much larger the determinant of the covariance is than without the terms.
-        let mut ratio = 1.0f32;
-        for g in 0..2 {
-            let r: [f32; 3] = std::array::from_fn(|k| self.meas[3 * g + k] - pred[3 * g + k]);
-            let a = &self.axis[g];
-            let across = self.inv_var[3 * g];
-            let extra =
-                self.position[g] * terms[g] + self.interpolation[g] * terms[INTERPOLATION + g];
-            if extra > 0.0 && across > 0.0 {
-                // Covariance D + c a a^T, D diagonal: the variance across plus `extra` on x
-                // and y, c the variance along less that across; its inverse by
-                // Sherman-Morrison.
-                let va = 1.0 / across;
-                let c = 1.0 / (across + self.along[g]) - va;
-                let inv = 1.0 / (va + extra);
-                let q = inv * (r[0] * r[0] + r[1] * r[1]) + across * r[2] * r[2];
-                let ad = inv * (a[0] * r[0] + a[1] * r[1]) + across * a[2] * r[2];
-                let aa = inv * (a[0] * a[0] + a[1] * a[1]) + across * a[2] * a[2];
-                let den = 1.0 + c * aa;
-                let base = 1.0 + c * across * (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-                chi2 += q - c * ad * ad / den;
-                let grown = 1.0 + extra * across;
-                ratio *= grown * grown * den / base;
-            } else {
-                let p = r[0] * a[0] + r[1] * a[1] + r[2] * a[2];
-                for (k, v) in r.iter().enumerate() {
-                    chi2 += self.inv_var[3 * g + k] * v * v;
-                }
-                chi2 += self.along[g] * p * p;
-            }
-        }
-        // The depth and the contact lane (whose inverse variance is 0).
-        let rest = NCH - 1..LANES;
-        for ((m, p), v) in self.meas[rest.clone()]
-            .iter()
-            .zip(&pred[rest.clone()])
-            .zip(&self.inv_var[rest])
-        {
-            chi2 += v * (m - p) * (m - p);
-        }
-        let ll = if self.tail > 0.0 {
-            // Multivariate Student-t in the Gaussian's chi^2 over the d channels used:
-            // log (1 + chi^2 / nu) ^ (-(nu + d) / 2).
-            -0.5 * (self.tail + self.channels) * (chi2 / self.tail).ln_1p()
-        } else {
-            -0.5 * chi2
-        };
-        if ratio > 1.0 {
-            ll - 0.5 * ratio.ln()
-        } else {
-            ll
-        }
-    }
 }
 
 /// Which lookup the likelihood uses.
@@ -769,23 +639,23 @@ impl Lookup {
         out: &mut [f32],
         read: impl Fn(&Level, &Params<D>, [f32; D]) -> Sample,
     ) {
-        let n = out.len();
         let params = self.params::<D>();
         let tilts = self.tilts.filter(|_| w.tilt_floor > 0.0);
+        let n = out.len();
         let mut along = [0.0f32; D];
-        for (i, o) in out.iter_mut().enumerate() {
+        weigh_in_batches(w, heights, out, |i| {
             let raw: [f32; D] = std::array::from_fn(|k| rel[k * n + i]);
             let t = std::array::from_fn(|k| raw[k].clamp(0.0, params.0.top[k]));
             let (level, p, u) = self.level_at(t, &params);
-            let mut at = read(level, p, u);
+            let at = read(level, p, u);
             if let Some(tl) = &tilts
                 && tl.wrench_at(&raw, |k| params.0.top[k], w.tilt_floor, &mut along)
             {
                 let (level, p, u) = self.level_at(along, &params);
-                at = at.with_wrench(read(level, p, u));
+                return at.with_wrench(read(level, p, u));
             }
-            *o = w.log_likelihood(&at.at_height(w, heights.get(i)), &at.terms);
-        }
+            at
+        });
     }
 
     fn ll_any(
@@ -806,21 +676,42 @@ impl Lookup {
                 v.iter_mut().for_each(|x| *x = x.round());
             }
         };
-        for (i, o) in out.iter_mut().enumerate() {
+        weigh_in_batches(w, heights, out, |i| {
             for k in 0..d {
                 raw[k] = rel[k * n + i];
                 u[k] = raw[k].clamp(0.0, top(k));
             }
             round(&mut u);
-            let mut at = self.sample(&u);
+            let at = self.sample(&u);
             if let Some(tl) = &tilts
                 && tl.wrench_at(&raw, top, w.tilt_floor, &mut along)
             {
                 round(&mut along);
-                at = at.with_wrench(self.sample(&along));
+                return at.with_wrench(self.sample(&along));
             }
-            *o = w.log_likelihood(&at.at_height(w, heights.get(i)), &at.terms);
+            at
+        });
+    }
+}
+
+/// Writes into `out` each particle's log-likelihood under `w` of the sample `sample` reads
+/// for it, its contact height along the tool's axis in `heights` (empty: the measured one),
+/// weighed [`BATCH`] at a time.
+#[inline(always)]
+fn weigh_in_batches(
+    w: &Weights,
+    heights: &[f32],
+    out: &mut [f32],
+    mut sample: impl FnMut(usize) -> Sample,
+) {
+    let mut batch = Batch::default();
+    for (b, outs) in out.chunks_mut(BATCH).enumerate() {
+        for j in 0..outs.len() {
+            let i = b * BATCH + j;
+            let at = sample(i);
+            batch.set(j, &at.at_height(w, heights.get(i)), &at.terms);
         }
+        w.log_likelihoods(&batch, outs);
     }
 }
 
@@ -1182,76 +1073,10 @@ mod tests {
     use std::path::Path;
 
     use ftfusion_testkit::{FORCE, HOLE_DEPTH, field, peg_map};
-    use nalgebra::{Matrix3, Vector3};
+    use nalgebra::Vector3;
 
     use super::*;
-
-    /// The terms' log-likelihood in f64 with each group's covariance written out: across
-    /// `va`, along the measured vector `vb`, plus `position` times the slope and
-    /// `interpolation` times the interpolation error on x and y; less the log determinant
-    /// of the covariance without them.
-    fn written_out(w: &Weights, pred: &[f32; LANES], terms: &[f32; TERMS]) -> f64 {
-        let mut ll = 0.0;
-        for g in 0..2 {
-            let a = Vector3::from_iterator(w.axis[g].iter().map(|v| f64::from(*v)));
-            let va = 1.0 / f64::from(w.inv_var[3 * g]);
-            let vb = 1.0 / (f64::from(w.inv_var[3 * g]) + f64::from(w.along[g]));
-            let base = Matrix3::identity() * va + a * a.transpose() * (vb - va);
-            let e = f64::from(w.position[g]) * f64::from(terms[g])
-                + f64::from(w.interpolation[g]) * f64::from(terms[INTERPOLATION + g]);
-            let slope = Matrix3::from_diagonal(&Vector3::new(e, e, 0.0));
-            let cov = base + slope;
-            let r = Vector3::from_iterator(
-                (0..3).map(|k| f64::from(w.meas[3 * g + k]) - f64::from(pred[3 * g + k])),
-            );
-            let chi2 = (r.transpose() * cov.try_inverse().expect("invertible") * r)[0];
-            ll += -0.5 * chi2 - 0.5 * (cov.determinant() / base.determinant()).ln();
-        }
-        ll
-    }
-
-    #[test]
-    fn mismatch_terms_widen_the_likelihood_as_the_covariance_written_out_does() {
-        let meas = [0.3, -0.2, 20.0, 0.12, 0.05, 0.001, 0.0, 0.0];
-        let pred = [0.25, -0.1, 19.0, 0.10, 0.07, 0.0, 0.0, 1.0];
-        let unit = |v: &[f32]| {
-            let n = v.iter().map(|x| x * x).sum::<f32>().sqrt();
-            [v[0] / n, v[1] / n, v[2] / n]
-        };
-        // Along the measured force it may miss more than across, along the torque less.
-        let (va, vb) = ([1e-2f32, 1e-5], [3e-2f32, 0.5e-5]);
-        let mut inv_var = [0.0f32; LANES];
-        inv_var[..3].fill(1.0 / va[0]);
-        inv_var[3..6].fill(1.0 / va[1]);
-        let w = Weights {
-            meas,
-            inv_var,
-            axis: [unit(&meas[..3]), unit(&meas[3..6])],
-            along: [1.0 / vb[0] - 1.0 / va[0], 1.0 / vb[1] - 1.0 / va[1]],
-            position: [2.5e-11, 4e-11],
-            interpolation: [0.7, 0.5],
-            ..Weights::default()
-        };
-        for terms in [
-            [1e9, 4e6, 0.0, 0.0],
-            [0.0, 6e6, 0.0, 0.0],
-            [4e8, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 2e-3, 4e-5],
-            [1e9, 4e6, 0.0, 2e-4],
-            [0.0; TERMS],
-        ] {
-            let got = f64::from(w.log_likelihood(&pred, &terms));
-            let want = written_out(&w, &pred, &terms);
-            assert!(
-                (got - want).abs() < 1e-4 * (1.0 + want.abs()),
-                "terms {terms:?}: {got} against {want}"
-            );
-        }
-        // Steeper, the same residual costs less, and a perfect prediction more.
-        let steep = [0.0, 6e6, 0.0, 0.0];
-        assert!(w.log_likelihood(&pred, &steep) > w.log_likelihood(&pred, &[0.0; TERMS]));
-        assert!(w.log_likelihood(&meas, &steep) < w.log_likelihood(&meas, &[0.0; TERMS]));
-    }
+    use crate::filter::weights::INTERPOLATION;
 
     #[test]
     fn the_slopes_are_the_fields_derivatives() {

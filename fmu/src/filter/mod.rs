@@ -16,6 +16,7 @@ mod noise;
 mod resample;
 mod state;
 mod vision;
+mod weights;
 
 use std::path::Path;
 use std::sync::Arc;
@@ -27,11 +28,12 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
 pub use estimate::Estimate;
-pub use lookup::{Interpolation, LANES, Lookup, MapAxis, Weights};
+pub use lookup::{Interpolation, Lookup, MapAxis};
 pub use mismatch::MapMismatch;
 pub use negative::NegativeContact;
 pub use state::{Reader, Writer};
 pub use vision::{Prepared, VisionMeasurement, VisionMethod, VisionSense};
+pub use weights::{LANES, Weights};
 
 use crate::error::{FusionError, Result};
 use mismatch::Mismatch;
