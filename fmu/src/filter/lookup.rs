@@ -202,14 +202,21 @@ impl Tilts {
     ) -> bool {
         let theta: [f32; 2] =
             std::array::from_fn(|j| self.min[j] + raw[self.axes[j]] * self.step[j]);
-        let size = (theta[0] * theta[0] + theta[1] * theta[1]).sqrt();
-        if size == 0.0 {
+        let size2 = theta[0] * theta[0] + theta[1] * theta[1];
+        if size2 == 0.0 {
             return false;
         }
-        let mut scale = (floor / size).max(1.0);
+        // Divisions only where a scale applies: most particles' tilts lie within the range
+        // and beyond `floor`.
+        let mut scale = if size2 < floor * floor {
+            floor / size2.sqrt()
+        } else {
+            1.0
+        };
         for (j, &t) in theta.iter().enumerate() {
+            // The bound on the tilt's side of zero, of the same sign as the tilt.
             let bound = if t > 0.0 { self.max[j] } else { self.min[j] };
-            if t * scale / bound > 1.0 {
+            if (t * scale).abs() > bound.abs() {
                 scale = bound / t;
             }
         }

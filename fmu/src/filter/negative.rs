@@ -45,8 +45,20 @@ pub struct NegativeContact {
     y: MapAxis,
     /// The particles' axis indices of `x` and `y`.
     axes: [usize; 2],
-    /// The object rotation axes: index, axis and play (grid units).
-    rotations: Vec<(usize, MapAxis, f32)>,
+    /// The object rotation axes.
+    rotations: Vec<Rotation>,
+}
+
+/// An object rotation axis as the term reads it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Rotation {
+    /// The particles' axis index.
+    k: usize,
+    axis: MapAxis,
+    /// Its zero rotation (grid units).
+    zero: f32,
+    /// The fit's play about it (grid units).
+    play: f32,
 }
 
 impl NegativeContact {
@@ -58,12 +70,17 @@ impl NegativeContact {
             axes.iter()
                 .position(|a| a.dof.pose == Pose::Object && a.dof.axis == axis)
         };
-        let rotations: Vec<(usize, MapAxis, f32)> = axes
+        let rotations: Vec<Rotation> = axes
             .iter()
             .zip(play)
             .enumerate()
             .filter(|(_, (a, _))| a.dof.pose == Pose::Object && a.dof.is_rotation())
-            .map(|(k, (&a, &p))| (k, a, p))
+            .map(|(k, (&axis, &play))| Rotation {
+                k,
+                axis,
+                zero: axis.coord(0.0),
+                play,
+            })
             .collect();
         let others_allowed = axes.iter().zip(play).all(|(a, &p)| match a.dof.pose {
             Pose::Object => matches!(a.dof.axis, Axis::X | Axis::Y) || p > 0.0,
@@ -103,9 +120,12 @@ impl NegativeContact {
             .collect();
         let n = ll.len();
         for (i, l) in ll.iter_mut().enumerate() {
-            if swept.iter().any(|s| self.within(s, pos, rel, n, i)) {
-                *l += RULED_OUT;
-            }
+            // Without a branch on the particle (which way it goes is a coin's toss there):
+            // every motion is tested.
+            let within = swept
+                .iter()
+                .fold(false, |w, s| w | self.within(s, pos, rel, n, i));
+            *l += if within { RULED_OUT } else { 0.0 };
         }
     }
 
@@ -123,9 +143,11 @@ impl NegativeContact {
         let s = self.swept(at, at);
         let n = ll.len();
         for (i, l) in ll.iter_mut().enumerate() {
-            if !self.within(&s, pos, rel, n, i) {
-                *l += RULED_OUT;
-            }
+            *l += if self.within(&s, pos, rel, n, i) {
+                0.0
+            } else {
+                RULED_OUT
+            };
         }
     }
 
@@ -133,10 +155,9 @@ impl NegativeContact {
     /// particles' terms.
     fn swept(&self, from: [f64; 3], to: [f64; 3]) -> Swept {
         let slid = (from[0] - to[0]).hypot(from[1] - to[1]) > UNMOVED * self.clearance;
-        let twisted = self
-            .rotations
-            .iter()
-            .any(|(_, a, _)| a.dof.axis == Axis::Rz && (from[2] - to[2]).abs() > UNMOVED * a.step);
+        let twisted = self.rotations.iter().any(|r| {
+            r.axis.dof.axis == Axis::Rz && (from[2] - to[2]).abs() > UNMOVED * r.axis.step
+        });
         let from = match (slid, twisted) {
             (true, false) => [from[0], from[1], to[2]],
             (false, true) => [to[0], to[1], from[2]],
@@ -157,7 +178,11 @@ impl NegativeContact {
             end,
             line,
             len2: line[0] * line[0] + line[1] * line[1],
-            yaws: from[2] - to[2],
+            twist: self
+                .rotations
+                .iter()
+                .find(|r| r.axis.dof.axis == Axis::Rz)
+                .map_or(0.0, |r| ((from[2] - to[2]) / r.axis.step) as f32),
         }
     }
 
@@ -170,19 +195,16 @@ impl NegativeContact {
             - self
                 .rotations
                 .iter()
-                .map(|(k, a, play)| {
-                    let e = a.difference(rel[k * n + i] - a.coord(0.0));
-                    let swept = if a.dof.axis == Axis::Rz {
-                        (s.yaws / a.step) as f32
+                .map(|r| {
+                    let e = r.axis.difference(rel[r.k * n + i] - r.zero);
+                    let swept = if r.axis.dof.axis == Axis::Rz {
+                        s.twist
                     } else {
                         0.0
                     };
-                    beyond(a, e, swept) / play
+                    beyond(&r.axis, e, swept) / r.play
                 })
                 .sum::<f32>();
-        if left <= 0.0 {
-            return false;
-        }
         let [u, v] = self.axes.map(|k| pos[k * n + i]);
         let (dx, dy) = ((u - s.end[0]) * s.scale[0], (v - s.end[1]) * s.scale[1]);
         let [ax, ay] = s.line;
@@ -193,7 +215,7 @@ impl NegativeContact {
             0.0
         };
         let (ex, ey) = (dx - t * ax, dy - t * ay);
-        ex * ex + ey * ey < left * left
+        (left > 0.0) & (ex * ex + ey * ey < left * left)
     }
 }
 
@@ -208,8 +230,9 @@ struct Swept {
     line: [f32; 2],
     /// The line's squared length.
     len2: f32,
-    /// The yaws swept, from the end to the start (rad).
-    yaws: f64,
+    /// The yaws swept, from the end to the start (grid units of `object.rz`; 0 without
+    /// that axis).
+    twist: f32,
 }
 
 /// How far the rotation error `e` (grid units) lies outside the interval between 0 and
