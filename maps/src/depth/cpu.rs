@@ -224,6 +224,7 @@ fn lanes(s: &[f32], k: usize) -> f32x8 {
 }
 
 /// Minimum of `a[k] - b[k]`, eight lanes at a time.
+#[inline(always)]
 fn min_diff(a: &[f32], b: &[f32]) -> f32 {
     let full = a.len() - a.len() % 8;
     let mut acc = f32x8::splat(f32::INFINITY);
@@ -258,6 +259,7 @@ fn normal_of(normals: &[[f32; 3]], t: u32) -> [f32; 3] {
 /// `normal` (B's normal at pixel k), the height and normal sums too, over the lanes between
 /// the first and the last contact alone (the others add zeros: the same sums); without,
 /// they are left 0 (the caller knows them: flat A row, one B normal).
+#[inline(always)]
 fn row_sums(
     a: &[f32],
     b: &[f32],
@@ -383,25 +385,6 @@ fn run_sums(h: f32, b: &[f32], ends: &[u32], bcol: usize, thr: f32, col0: usize)
         first,
         last,
     }
-}
-
-/// The normal shared by every pixel of a row of B that sees the triangles `tris` (normals
-/// `bn`), if they share one ([0, 0, 0] where the row sees none).
-fn uniform_normal(tris: &[u32], bn: &[[f32; 3]]) -> Option<[f32; 3]> {
-    let (mut first, mut last) = (None, u32::MAX);
-    // A triangle seen again at once has its normal compared already.
-    for &t in tris {
-        if t == last {
-            continue;
-        }
-        last = t;
-        match (bn.get(t as usize), first) {
-            (Some(n), None) => first = Some(*n),
-            (Some(n), Some(f)) if *n != f => return None,
-            _ => {}
-        }
-    }
-    Some(first.unwrap_or([0.0; 3]))
 }
 
 /// Per row of A's image, its height when all its pixels with a surface share one.
@@ -686,7 +669,10 @@ fn summarize(
         let (av, bv) = (&a.height[p.r * w + p.c0..][..n], &b.height[bs..bs + n]);
         let normal = |k: usize| normal_of(rows.b_normals, b.tri[bs + k]);
         let brow = bs / bw;
-        let uniform = (rows.whole.flat[p.r], rows.whole.uniform[brow]);
+        let uniform = (
+            rows.whole.flat[p.r],
+            (rows.whole.normals).uniform(rows.b_normals, brow, 0..=bw - 1),
+        );
         let r = match (uniform, rows.solid[p.r]) {
             ((Some(h), Some(normal)), Some(sd)) if whole[r] <= thr => {
                 // The whole run touches: its sums in closed form (whole numbers, exact in
@@ -745,24 +731,83 @@ fn add_row(out: &mut ContactSummary, r: usize, sums: &RowSums) {
 
 /// What holds of whole rows of two images, A's and B's, and so of their rows in any window
 /// ([`contact_in_place`]): a row of A flat as a whole is flat, at its height, wherever A has
-/// a surface in it; a row of B whose pixels share one normal shares it wherever B has one.
+/// a surface in it; B's pixels in runs of one normal.
 pub(crate) struct WholeRows {
     /// Per row of A, its height when all its pixels with a surface share one.
     flat: Vec<Option<f32>>,
-    /// Per row of B, the normal all its pixels share, if they share one.
-    uniform: Vec<Option<[f32; 3]>>,
+    /// B's runs of one normal.
+    normals: NormalRuns,
 }
 
 impl WholeRows {
     /// The rows of `a` and of `b` (normals `b_normals`).
     pub(crate) fn of(a: &DepthImage, b: &DepthImage, b_normals: &[[f32; 3]]) -> Self {
-        let w = b.window.width;
         Self {
             flat: flat_rows(a),
-            uniform: (0..b.window.height)
-                .map(|r| uniform_normal(&b.tri[r * w..(r + 1) * w], b_normals))
-                .collect(),
+            normals: NormalRuns::of(b, b_normals),
         }
+    }
+}
+
+/// B's pixels in runs that share one normal, read from each pixel rightwards: whether the
+/// pixels with a surface among any columns of a row share one normal, without a pass over
+/// them ([`NormalRuns::uniform`]).
+struct NormalRuns {
+    width: usize,
+    /// Per pixel, the first column at or after it (in its row) whose surface's normal
+    /// differs from that of the first pixel with a surface there (the width: none).
+    until: Vec<u32>,
+    /// Per pixel, the column and the triangle of the first pixel at or after it with a
+    /// surface (the width and `u32::MAX`: none).
+    first: Vec<[u32; 2]>,
+}
+
+impl NormalRuns {
+    /// The runs of `b`'s rows (triangle normals `bn`). Neighbouring pixels of one triangle
+    /// share its normal; others where the normals compare equal.
+    fn of(b: &DepthImage, bn: &[[f32; 3]]) -> Self {
+        let w = b.window.width;
+        let (mut until, mut first) = (vec![0; b.tri.len()], vec![[0; 2]; b.tri.len()]);
+        for (r, tris) in b.tri.chunks_exact(w).enumerate() {
+            // The nearest pixel with a surface to the right: its column and triangle.
+            let (mut next, mut end): (Option<(usize, u32)>, usize) = (None, w);
+            for (c, &t) in tris.iter().enumerate().rev() {
+                if let Some(n) = bn.get(t as usize) {
+                    let same = next.is_some_and(|(k, tk)| {
+                        (tk == t && k == c + 1) || bn.get(tk as usize) == Some(n)
+                    });
+                    if !same {
+                        end = next.map_or(w, |(k, _)| k);
+                    }
+                    next = Some((c, t));
+                }
+                until[r * w + c] = end as u32;
+                first[r * w + c] = next.map_or([w as u32, u32::MAX], |(k, t)| [k as u32, t]);
+            }
+        }
+        Self {
+            width: w,
+            until,
+            first,
+        }
+    }
+
+    /// The normal every pixel with a surface shares among columns `cols` of row `r` (normals
+    /// `bn`), if they share one ([0, 0, 0] where none has a surface).
+    fn uniform(
+        &self,
+        bn: &[[f32; 3]],
+        r: usize,
+        cols: std::ops::RangeInclusive<usize>,
+    ) -> Option<[f32; 3]> {
+        let k = r * self.width + cols.start();
+        let [col, t] = self.first[k];
+        let seen = (col as usize <= *cols.end()).then_some(t);
+        (self.until[k] as usize > *cols.end()).then(|| {
+            seen.and_then(|t| bn.get(t as usize))
+                .copied()
+                .unwrap_or_default()
+        })
     }
 }
 
@@ -803,12 +848,15 @@ pub(crate) fn contact_in_place(
     // Each row of A over B: its row of B and its least gap.
     let rows = &mut scratch.rows;
     rows.clear();
-    rows.extend((0..aw.height).filter_map(|r| {
-        let br = usize::try_from(r as i64 + off_row).ok()?;
-        let cols = over.filter(|_| br < bw.height)?;
-        let gap = min_diff(&a.heights(r)[cols.0..=cols.1], &b.heights(br)[bcols(cols)]);
-        Some((r, br, gap))
-    }));
+    if let Some(cols) = over {
+        // A's rows over B's.
+        let within = |r: i64| r.clamp(0, aw.height as i64) as usize;
+        for r in within(-off_row)..within(bw.height as i64 - off_row) {
+            let br = (r as i64 + off_row) as usize;
+            let gap = min_diff(&a.heights(r)[cols.0..=cols.1], &b.heights(br)[bcols(cols)]);
+            rows.push((r, br, gap));
+        }
+    }
     let gap = rows.iter().fold(f32::INFINITY, |m, &(_, _, g)| m.min(g));
     let mut out = ContactSummary::none(gap);
     if !gap.is_finite() {
@@ -826,7 +874,10 @@ pub(crate) fn contact_in_place(
         let tris = b.tris(br);
         // A row in contact has a surface in both images.
         let flat = whole.flat[a.image_row(r)].or_else(|| flat_row(arow));
-        let uniform = whole.uniform[b.image_row(br)].or_else(|| uniform_normal(tris, b_normals));
+        let (row, col) = (b.image_row(br), b.image_col());
+        let runs = &whole.normals;
+        let uniform = (runs.uniform(b_normals, row, 0..=runs.width - 1))
+            .or_else(|| runs.uniform(b_normals, row, col..=col + bw.width - 1));
         let sums = match (flat, uniform) {
             (Some(h), Some(normal)) => {
                 let mut sums = row_sums(av, bv, None, thr, c0 as f32);
@@ -1083,6 +1134,86 @@ mod tests {
             height,
         };
         DepthImage::empty(window, 1.0, Surface::Top)
+    }
+
+    /// The normal shared by every pixel of a row of B that sees the triangles `tris`
+    /// (normals `bn`), if they share one ([0, 0, 0] where the row sees none), pixel by
+    /// pixel.
+    fn uniform_normal(tris: &[u32], bn: &[[f32; 3]]) -> Option<[f32; 3]> {
+        let (mut first, mut last) = (None, u32::MAX);
+        // A triangle seen again at once has its normal compared already.
+        for &t in tris {
+            if t == last {
+                continue;
+            }
+            last = t;
+            match (bn.get(t as usize), first) {
+                (Some(n), None) => first = Some(*n),
+                (Some(n), Some(f)) if *n != f => return None,
+                _ => {}
+            }
+        }
+        Some(first.unwrap_or([0.0; 3]))
+    }
+
+    #[test]
+    fn runs_of_one_normal_agree_with_every_windows_pixels() {
+        // Triangle normals: two equal, one signed zero apart, one NaN (a degenerate
+        // triangle), one other; triangle 9 is none (no surface).
+        let up = [0.0, 0.0, 1.0];
+        let bn = [
+            up,
+            up,
+            [-0.0, 0.0, 1.0],
+            [f32::NAN, 0.0, 1.0],
+            [0.6, 0.0, 0.8],
+        ];
+        let (width, height) = (40, 60);
+        let mut b = top_image(width, height);
+        let mut state = 777u64;
+        let mut next = |m: usize| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as usize % m
+        };
+        for (r, row) in b.tri.chunks_exact_mut(width).enumerate() {
+            // Runs of one triangle, each 1 to 6 pixels; rows after the first few draw from
+            // fewer triangles, so that some are uniform over long stretches.
+            let choices: &[u32] = match r % 4 {
+                0 => &[0, 1, 2, 3, 4, 9],
+                1 => &[0, 1, 9],
+                2 => &[3, 9],
+                _ => &[0, 1, 2],
+            };
+            let mut c = 0;
+            while c < width {
+                let (len, t) = (1 + next(6), choices[next(choices.len())]);
+                row[c..(c + len).min(width)].fill(t);
+                c += len;
+            }
+        }
+        let runs = NormalRuns::of(&b, &bn);
+        let bits = |n: Option<[f32; 3]>| n.map(|v| v.map(f32::to_bits));
+        let (mut uniform, mut mixed, mut windows) = (0, 0, 0);
+        for r in 0..height {
+            let tris = &b.tri[r * width..(r + 1) * width];
+            for c0 in 0..width {
+                for c1 in c0..width {
+                    let want = uniform_normal(&tris[c0..=c1], &bn);
+                    let got = runs.uniform(&bn, r, c0..=c1);
+                    assert_eq!(bits(got), bits(want), "row {r} columns {c0}..={c1}");
+                    uniform += usize::from(want.is_some() && c1 > c0 + 4);
+                    mixed += usize::from(want.is_none());
+                    windows += 1;
+                }
+            }
+        }
+        // Both kinds, long uniform stretches among them.
+        assert!(
+            uniform > windows / 20 && mixed > windows / 20,
+            "{uniform} long uniform and {mixed} mixed windows of {windows}"
+        );
     }
 
     #[test]

@@ -456,6 +456,11 @@ impl<'a> Patch<'a> {
         self.start / self.image.window.width + r
     }
 
+    /// The image's column that is column 0 of the window.
+    pub fn image_col(&self) -> usize {
+        self.start % self.image.window.width
+    }
+
     /// Heights of row `r` of the window.
     pub fn heights(&self, r: usize) -> &'a [f32] {
         let k = self.start + r * self.image.window.width;
