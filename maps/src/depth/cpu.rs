@@ -1125,6 +1125,16 @@ mod tests {
         assert!(touched >= 3, "the windows touch: {touched}");
     }
 
+    /// Numbers below `m` drawn from a linear congruential generator seeded with `seed`.
+    fn draws(mut seed: u64) -> impl FnMut(usize) -> usize {
+        move |m| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) as usize % m
+        }
+    }
+
     /// An empty image of B's kind, `width` x `height` pixels at the origin.
     fn top_image(width: usize, height: usize) -> DepthImage {
         let window = PixelWindow {
@@ -1170,13 +1180,7 @@ mod tests {
         ];
         let (width, height) = (40, 60);
         let mut b = top_image(width, height);
-        let mut state = 777u64;
-        let mut next = |m: usize| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 33) as usize % m
-        };
+        let mut next = draws(777);
         for (r, row) in b.tri.chunks_exact_mut(width).enumerate() {
             // Runs of one triangle, each 1 to 6 pixels; rows after the first few draw from
             // fewer triangles, so that some are uniform over long stretches.
@@ -1224,13 +1228,7 @@ mod tests {
         let (width, height) = (120, 4);
         let levels = [f32::NEG_INFINITY, 0.0, 1e-3, 2.5e-3, 4e-3];
         let mut b = top_image(width, height);
-        let mut state = 12345u64;
-        let mut next = |m: usize| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 33) as usize % m
-        };
+        let mut next = draws(12345);
         for row in b.height.chunks_exact_mut(width).take(3) {
             let mut c = 0;
             while c < width {
