@@ -6,9 +6,9 @@ use ftmap::NCH;
 
 /// Channels per padded cell: fx fy fz tx ty tz depth, contact (1) or inserted (0).
 pub const LANES: usize = 8;
-/// Mismatch terms per cell: the squared slopes of the force and of the torque (the lookup's slopes),
-/// then the variances of their multilinear interpolation error;
-/// each the mean over the vector's x and y components, across the tool's axis.
+/// Mismatch terms per cell: the squared slopes of the force and of the torque, then the
+/// variances of their multilinear interpolation error (both from the lookup's map); each the
+/// mean over the vector's x and y components, across the tool's axis.
 pub(super) const TERMS: usize = 4;
 /// The first of the interpolation-error terms.
 pub(super) const INTERPOLATION: usize = 2;
@@ -64,15 +64,15 @@ pub struct Weights {
     /// squared slope (m^2: the square of the position the map may miss, in each axis across
     /// the approach), for the force and the torque.
     pub position: [f32; 2],
-    /// Share of the lookup's interpolation-error variance ([`interpolation_errors`]) that
-    /// counts, for the force and the torque: the `mismatch_interpolation` parameter for the
+    /// Share of the lookup's interpolation-error variance (the terms from `INTERPOLATION` on)
+    /// that counts, for the force and the torque: the `mismatch_interpolation` parameter for the
     /// multilinear lookup, 0 for the nearest cell (whose error, that share of the cell's
     /// width, is in `position`).
     pub interpolation: [f32; 2],
     /// Degrees of freedom of a Student-t likelihood over the channels used; 0: Gaussian.
     pub tail: f32,
     /// Relative tilt (rad) below which the force and torque are read where the tilt's
-    /// direction meets this radius ([`Tilts`]); 0: where the particle lies.
+    /// direction meets this radius (the lookup's tilts); 0: where the particle lies.
     pub tilt_floor: f32,
     /// The channels used (inverse variance above 0), counted once by [`Weights::student`].
     pub(crate) channels: f32,

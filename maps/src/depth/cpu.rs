@@ -876,6 +876,8 @@ pub(crate) fn contact_in_place(
         let flat = whole.flat[a.image_row(r)].or_else(|| flat_row(arow));
         let (row, col) = (b.image_row(br), b.image_col());
         let runs = &whole.normals;
+        // The whole row's normal first, then the window's: where both share one, the first
+        // pixel's of the row, as the coarse reduction takes it.
         let uniform = (runs.uniform(b_normals, row, 0..=runs.width - 1))
             .or_else(|| runs.uniform(b_normals, row, col..=col + bw.width - 1));
         let sums = match (flat, uniform) {
