@@ -9,6 +9,7 @@ use crate::mesh::{Mesh, NO_NEIGHBOUR};
 pub mod cpu;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub(crate) mod region;
 
 /// Height value of a pixel where A has no surface (never in contact).
 pub const EMPTY_A: f32 = f32::INFINITY;
