@@ -78,7 +78,7 @@ impl Facets {
     }
 }
 
-/// Most lines that bound one part of a pixel's footprint.
+/// Most lines that bound one part of a pixel's footprint (a triangle's three).
 const MAX_LINES: usize = 3;
 
 /// One plane of a surface over the part of a pixel's square where each of its lines holds,
@@ -93,6 +93,55 @@ struct Part {
     n: u8,
     /// One triangle of the plane.
     tri: u32,
+}
+
+/// A part with no plane and no lines, to fill arrays.
+const EMPTY_PART: Part = Part {
+    plane: [0.0; 3],
+    lines: [[0.0; 3]; MAX_LINES],
+    n: 0,
+    tri: u32::MAX,
+};
+
+/// The parts of pixel (x, y) of one image (its image, triangles and footprints): its
+/// footprint's, or where that is [`Footprint::Mixed`], each triangle seen about it within
+/// its three edges (written into `buf`); `None` where it sees no surface.
+fn parts_at<'b>(
+    (img, facets, prints): (&DepthImage, &Facets, &'b Footprints),
+    x: i64,
+    y: i64,
+    buf: &'b mut [Part; 9],
+) -> Option<&'b [Part]> {
+    match prints.at(x, y)? {
+        Footprint::Parts { parts, n } => Some(&parts[..usize::from(*n)]),
+        Footprint::Mixed => {
+            let mut tris = [0; 9];
+            let n = about(img, x, y, &mut tris);
+            let (xf, yf) = (x as f64, y as f64);
+            let mut k = 0;
+            for &t in &tris[..n] {
+                let Some(c) = &facets.corners[t as usize] else {
+                    continue;
+                };
+                let p = facets.plane[t as usize];
+                let mut part = Part {
+                    plane: [p[0] + p[1] * xf + p[2] * yf, p[1], p[2]],
+                    tri: t,
+                    ..EMPTY_PART
+                };
+                for e in 0..3 {
+                    let (a, b) = (c[e], c[(e + 1) % 3]);
+                    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+                    // Left of a -> b, about the pixel's centre.
+                    part.lines[e] = [ex * (yf - a[1]) - ey * (xf - a[0]), -ey, ex];
+                }
+                part.n = 3;
+                buf[k] = part;
+                k += 1;
+            }
+            Some(&buf[..k])
+        }
+    }
 }
 
 impl Part {
@@ -117,7 +166,7 @@ enum Footprint {
     /// turns away from the surface, as a hole's does), or two faces on either side of the
     /// crease where their planes meet.
     Parts { parts: [Part; 2], n: u8 },
-    /// Anything else: the triangles seen about the pixel are clipped one by one.
+    /// Anything else: each triangle seen about the pixel is a part ([`parts_at`]).
     Mixed,
 }
 
@@ -451,20 +500,6 @@ impl Polygon {
         self.n = m;
     }
 
-    /// Keeps the part inside the counter-clockwise triangle `t` moved by `d`.
-    fn within(&mut self, t: &[[f64; 2]; 3], d: [f64; 2]) {
-        for k in 0..3 {
-            if self.n < 3 {
-                return;
-            }
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            let (ax, ay) = (a[0] + d[0], a[1] + d[1]);
-            let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
-            // Left of a -> b: ex (y - ay) - ey (x - ax) >= 0.
-            self.keep([ey * ax - ex * ay, -ey, ex]);
-        }
-    }
-
     fn corners(&self) -> &[[f64; 2]] {
         &self.p[..self.n]
     }
@@ -510,18 +545,23 @@ impl Overlay<'_> {
     /// Calls `f` with each piece of A's image pixel (x, y) over B's pixel (x, y) + `off`
     /// whose least gap may be at most `below` (m): pairs of planes whose gap over the whole
     /// square stays above it are passed over.
-    fn pieces(&self, x: i64, y: i64, off: [i64; 2], below: f64, mut f: impl FnMut(&Piece)) {
+    fn pieces(
+        &self,
+        [x, y]: [i64; 2],
+        off: [i64; 2],
+        below: f64,
+        [buf_a, buf_b]: &mut [[Part; 9]; 2],
+        mut f: impl FnMut(&Piece),
+    ) {
         let (bx, by) = (x + off[0], y + off[1]);
-        let (Some(fa), Some(fb)) = (self.a.2.at(x, y), self.b.2.at(bx, by)) else {
+        let Some(pa) = parts_at(self.a, x, y, buf_a) else {
             return;
         };
-        let (Footprint::Parts { parts: pa, n: na }, Footprint::Parts { parts: pb, n: nb }) =
-            (fa, fb)
-        else {
-            return self.mixed(x, y, off, below, f);
+        let Some(pb) = parts_at(self.b, bx, by, buf_b) else {
+            return;
         };
-        for a in &pa[..usize::from(*na)] {
-            for b in &pb[..usize::from(*nb)] {
+        for a in pa {
+            for b in pb {
                 let gap = [
                     a.plane[0] - b.plane[0],
                     a.plane[1] - b.plane[1],
@@ -535,6 +575,9 @@ impl Overlay<'_> {
                     .iter()
                     .chain(&b.lines[..usize::from(b.n)])
                 {
+                    if polygon.n < 3 {
+                        break;
+                    }
                     polygon.keep(*l);
                 }
                 if polygon.n >= 3 {
@@ -549,57 +592,11 @@ impl Overlay<'_> {
         }
     }
 
-    /// [`Overlay::pieces`] from the triangles seen about the two pixels, pair by pair (those
-    /// whose gap over the whole square stays above `below` passed over).
-    fn mixed(&self, x: i64, y: i64, off: [i64; 2], below: f64, mut f: impl FnMut(&Piece)) {
-        let (bx, by) = (x + off[0], y + off[1]);
-        let (mut ta, mut tb) = ([0; 9], [0; 9]);
-        let na = about(self.a.0, x, y, &mut ta);
-        let nb = about(self.b.0, bx, by, &mut tb);
-        let (fa, fb) = (self.a.1, self.b.1);
-        // A plane about a pixel's centre (cx, cy).
-        let local = |p: [f64; 3], cx: i64, cy: i64| {
-            [p[0] + p[1] * cx as f64 + p[2] * cy as f64, p[1], p[2]]
-        };
-        for &t in &ta[..na] {
-            let Some(corners) = &fa.corners[t as usize] else {
-                continue;
-            };
-            let mut in_a = Polygon::square();
-            in_a.within(corners, [-x as f64, -y as f64]);
-            if in_a.n < 3 {
-                continue;
-            }
-            let pa = local(fa.plane[t as usize], x, y);
-            for &u in &tb[..nb] {
-                let Some(corners) = &fb.corners[u as usize] else {
-                    continue;
-                };
-                let pb = local(fb.plane[u as usize], bx, by);
-                let gap = [pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]];
-                if gap[0] - 0.5 * (gap[1].abs() + gap[2].abs()) > below {
-                    continue;
-                }
-                let mut polygon = in_a;
-                polygon.within(corners, [-bx as f64, -by as f64]);
-                if polygon.n < 3 {
-                    continue;
-                }
-                f(&Piece {
-                    polygon,
-                    gap,
-                    height: pa,
-                    b_tri: u,
-                });
-            }
-        }
-    }
-
     /// The least gap over A's image pixel (x, y) (+inf where the parts do not overlap
     /// there).
-    fn least_gap(&self, x: i64, y: i64, off: [i64; 2], below: f64) -> f64 {
+    fn least_gap(&self, at: [i64; 2], off: [i64; 2], below: f64, bufs: &mut [[Part; 9]; 2]) -> f64 {
         let mut least = f64::INFINITY;
-        self.pieces(x, y, off, below, |p| {
+        self.pieces(at, off, below, bufs, |p| {
             for q in p.polygon.corners() {
                 least = least.min(p.gap[0] + p.gap[1] * q[0] + p.gap[2] * q[1]);
             }
@@ -654,8 +651,9 @@ pub(crate) fn exact_contact(
         }
     }
     let mut least = f64::from(seed.gap);
+    let mut bufs = [[EMPTY_PART; 9]; 2];
     while let Some((r, c)) = scratch.stack.pop() {
-        let g = o.least_gap(i64::from(c), i64::from(r), off, least + tol);
+        let g = o.least_gap([i64::from(c), i64::from(r)], off, least + tol, &mut bufs);
         scratch.reached.push((r, c, g));
         least = least.min(g);
         if g > least + tol {
@@ -694,7 +692,7 @@ pub(crate) fn exact_contact(
             continue;
         }
         let mut share = 0.0;
-        o.pieces(i64::from(c), i64::from(r), off, thr, |p| {
+        o.pieces([i64::from(c), i64::from(r)], off, thr, &mut bufs, |p| {
             let mut within = p.polygon;
             within.keep([thr - p.gap[0], -p.gap[1], -p.gap[2]]);
             let (a, [dx, dy]) = within.moments();
