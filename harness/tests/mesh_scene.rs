@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use ftmap::Task;
+use ftmap::mesh::Mesh;
 use ftmap::task::Units;
 use ftmap::task::cad;
 use ftmap::task::create::{NewTask, create};
@@ -160,28 +161,11 @@ fn a_scene_from_the_meshes_alone_keeps_the_clearance_and_its_campaign_succeeds()
 
 /// A closed box from `lo` to `hi`, its triangles facing out (or in, for a cavity).
 fn cuboid(lo: [f32; 3], hi: [f32; 3], outward: bool) -> Vec<[[f32; 3]; 3]> {
-    let corner = |i: usize| {
-        [
-            if i & 1 == 0 { lo[0] } else { hi[0] },
-            if i & 2 == 0 { lo[1] } else { hi[1] },
-            if i & 4 == 0 { lo[2] } else { hi[2] },
-        ]
-    };
-    // Each face's corners counter-clockwise seen from outside.
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    quads
-        .iter()
-        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+    let mesh = Mesh::cuboid(lo.map(f64::from), hi.map(f64::from));
+    (0..mesh.faces.len())
         .map(|t| {
-            let t = if outward { t } else { [t[0], t[2], t[1]] };
-            t.map(corner)
+            let [p, q, r] = mesh.triangle(t).map(|p| [p.x, p.y, p.z].map(|c| c as f32));
+            if outward { [p, q, r] } else { [p, r, q] }
         })
         .collect()
 }

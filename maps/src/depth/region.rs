@@ -731,35 +731,12 @@ pub(crate) fn exact_contact(
 
 #[cfg(test)]
 mod tests {
-    use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
     use super::*;
     use crate::depth::cpu::CpuBackend;
     use crate::depth::{DepthBackend, PixelWindow, View};
     use crate::mesh::Mesh;
-
-    /// The box [lo, hi], its faces turned outwards.
-    fn cuboid(lo: [f64; 3], hi: [f64; 3]) -> Mesh {
-        let v = (0..8)
-            .map(|k| {
-                let pick = |c: usize| if k >> c & 1 == 1 { hi[c] } else { lo[c] };
-                Point3::new(pick(0), pick(1), pick(2))
-            })
-            .collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let faces = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
-        Mesh::from_parts(v, faces)
-    }
 
     #[test]
     fn a_flat_face_on_a_tilted_one_rests_on_the_band_the_closed_form_gives() {
@@ -770,8 +747,8 @@ mod tests {
         // in it, and the pixels' count puts it a whole pixel deep or none.
         let (pixel, tolerance) = (1e-4, 2e-6_f32);
         let (x0, x1, y0, y1) = (-1.03e-3, 1.27e-3, -0.71e-3, 1.137e-3);
-        let a = cuboid([x0, y0, 0.0], [x1, y1, 1e-3]);
-        let b = cuboid([-3e-3, -3e-3, -2e-3], [3e-3, 3e-3, 0.0]);
+        let a = Mesh::cuboid([x0, y0, 0.0], [x1, y1, 1e-3]);
+        let b = Mesh::cuboid([-3e-3, -3e-3, -2e-3], [3e-3, 3e-3, 0.0]);
         for (theta, drop) in [(2f64.to_radians(), 0.0), (1.3f64.to_radians(), 3e-7)] {
             let view = View::along(-Vector3::z());
             let a_pose = Isometry3::identity();

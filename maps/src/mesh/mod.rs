@@ -112,6 +112,30 @@ impl Mesh {
         }
     }
 
+    /// The closed box from `lo` to `hi` (m), its triangles counter-clockwise seen from
+    /// outside (for tests and generated geometry).
+    pub fn cuboid(lo: [f64; 3], hi: [f64; 3]) -> Self {
+        let vertices = (0..8)
+            .map(|k| {
+                let pick = |c: usize| if k >> c & 1 == 1 { hi[c] } else { lo[c] };
+                Point3::new(pick(0), pick(1), pick(2))
+            })
+            .collect();
+        let quads: [[u32; 4]; 6] = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let faces = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        Self::from_parts(vertices, faces)
+    }
+
     /// The three corners of triangle `i`.
     pub fn triangle(&self, i: usize) -> [Point3<f64>; 3] {
         self.faces[i].map(|v| self.vertices[v as usize])
