@@ -130,10 +130,7 @@ fn parts_at<'b>(
                     ..EMPTY_PART
                 };
                 for e in 0..3 {
-                    let (a, b) = (c[e], c[(e + 1) % 3]);
-                    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
-                    // Left of a -> b, about the pixel's centre.
-                    part.lines[e] = [ex * (yf - a[1]) - ey * (xf - a[0]), -ey, ex];
+                    part.lines[e] = left_of(c[e], c[(e + 1) % 3], xf, yf);
                 }
                 part.n = 3;
                 buf[k] = part;
@@ -142,6 +139,18 @@ fn parts_at<'b>(
             Some(&buf[..k])
         }
     }
+}
+
+/// The side left of the line a -> b (image pixels) as an affine function of (dx, dy) about
+/// the pixel centre (x, y), in pixels: >= 0 on the left.
+fn left_of(a: [f64; 2], b: [f64; 2], x: f64, y: f64) -> [f64; 3] {
+    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+    let len = ex.hypot(ey);
+    [
+        (ex * (y - a[1]) - ey * (x - a[0])) / len,
+        -ey / len,
+        ex / len,
+    ]
 }
 
 impl Part {
@@ -276,18 +285,21 @@ fn footprint(
         let p = facets.plane[t as usize];
         Part {
             plane: [p[0] + p[1] * xf + p[2] * yf, p[1], p[2]],
-            lines: [[0.0; 3]; MAX_LINES],
-            n: 0,
             tri: t,
+            ..EMPTY_PART
         }
     };
     let one = |p: Part| Footprint::Parts {
         parts: [p, p],
         n: 1,
     };
-    let two = |p: Part, q: Part| Footprint::Parts {
-        parts: [p, q],
-        n: 2,
+    // Two parts, each with one line more (never past MAX_LINES here: at most two before).
+    let two = |p: Option<Part>, q: Option<Part>| {
+        p.zip(q)
+            .map_or(Footprint::Mixed, |(p, q)| Footprint::Parts {
+                parts: [p, q],
+                n: 2,
+            })
     };
     let through = edges.at(x, y);
     let w = img.window.width;
@@ -342,8 +354,8 @@ fn footprint(
         // The centre's plane is where it lies on the side it is seen on.
         let sign = if d[0] >= 0.0 { 1.0 } else { -1.0 };
         return Some(two(
-            p.with(d.map(|c| c * sign))?,
-            q.with(d.map(|c| -c * sign))?,
+            p.with(d.map(|c| c * sign)),
+            q.with(d.map(|c| -c * sign)),
         ));
     }
     // Outline edges through the square: all of one plane's triangles.
@@ -356,14 +368,10 @@ fn footprint(
             return Some(Footprint::Mixed);
         }
         segments[k] = [a, b];
-        let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
-        let len = ex.hypot(ey);
-        // Left of a -> b, in pixels, about the centre.
-        near = near.with([
-            (ex * (yf - a[1]) - ey * (xf - a[0])) / len,
-            -ey / len,
-            ex / len,
-        ])?;
+        let Some(within) = near.with(left_of(a, b, xf, yf)) else {
+            return Some(Footprint::Mixed);
+        };
+        near = within;
     }
     // Two edges that meet turning away from the surface (a hole's rim): either holds.
     let mut parts = [near, near];
@@ -399,7 +407,8 @@ fn footprint(
             .iter()
             .all(|l| l[0] + l[1] * dx + l[2] * dy >= -LINE_SLACK)
     };
-    // The centre must agree: on the outline's side where its plane is the owner's.
+    // The centre, unless it lies on a line, is in the near parts exactly where its plane
+    // is the owner's.
     let in_near = parts[..count].iter().any(|p| inside(p, 0.0, 0.0));
     let centre_near = centre != u32::MAX && same(centre, owner);
     if in_near != centre_near
@@ -413,8 +422,10 @@ fn footprint(
     }
     match (beyond, count) {
         (None, 1) => Some(one(near)),
-        (None, _) => Some(two(parts[0], parts[1])),
-        (Some(f), 1) if near.n == 1 => Some(two(near, part(f).with(near.lines[0].map(|c| -c))?)),
+        (None, _) => Some(two(Some(parts[0]), Some(parts[1]))),
+        (Some(f), 1) if near.n == 1 => {
+            Some(two(Some(near), part(f).with(near.lines[0].map(|c| -c))))
+        }
         _ => Some(Footprint::Mixed),
     }
 }
