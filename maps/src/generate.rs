@@ -10,7 +10,7 @@ use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vecto
 use rayon::prelude::*;
 
 use crate::depth::cpu::{CpuBackend, InPlace, WholeRows, contact_in_place};
-use crate::depth::region::{Facets, Flood, Footprints, Overlay, exact_contact};
+use crate::depth::region::{Flood, Overlay, Planes, exact_contact};
 use crate::depth::{
     ContactSummary, DepthBackend, DepthImage, PixelWindow, RenderJob, Shift, Surface, View,
     weigh_outline,
@@ -419,17 +419,13 @@ impl Context<'_> {
         if tips.contains(&true) {
             // The tips and slivers of tilted parts, computed exactly within each coarse
             // pixel from the coarse contact.
-            let facets = [
-                Facets::of(&job(self.mesh_a, a_pose, Surface::Bottom, a_win)),
-                Facets::of(&job(self.mesh_b, b_pose, Surface::Top, b_win)),
-            ];
-            let prints = [
-                Footprints::of(&a_img, &facets[0]),
-                Footprints::of(&b_img, &facets[1]),
+            let planes = [
+                Planes::of(&job(self.mesh_a, a_pose, Surface::Bottom, a_win), &a_img),
+                Planes::of(&job(self.mesh_b, b_pose, Surface::Top, b_win), &b_img),
             ];
             let overlay = Overlay {
-                a: (&a_img, &facets[0], &prints[0]),
-                b: (&b_img, &facets[1], &prints[1]),
+                a: &planes[0],
+                b: &planes[1],
                 b_normals: &b_normals,
             };
             (contacts.par_iter_mut().zip(&tips).zip(&shifts))

@@ -22,8 +22,29 @@ const STEEP: f64 = 1e5;
 /// agree with it (a centre on an outline counts as covered, [`super::ON_EDGE_PX`]).
 const LINE_SLACK: f64 = 2e-3;
 
+/// One image with what [`exact_contact`] reads of it beside its pixels: its mesh's
+/// triangles as planes and each pixel's footprint.
+pub(crate) struct Planes<'a> {
+    img: &'a DepthImage,
+    facets: Facets,
+    prints: Footprints,
+}
+
+impl<'a> Planes<'a> {
+    /// The planes of `img`, the image `job` renders.
+    pub(crate) fn of(job: &RenderJob<'_>, img: &'a DepthImage) -> Self {
+        let facets = Facets::of(job);
+        let prints = Footprints::of(img, &facets);
+        Self {
+            img,
+            facets,
+            prints,
+        }
+    }
+}
+
 /// A mesh's triangles as one image sees them.
-pub(crate) struct Facets {
+struct Facets {
     /// Per triangle, its corners (image columns, rows) counter-clockwise in that frame;
     /// `None` where the triangle is edge-on or turned away from the view.
     corners: Vec<Option<[[f64; 2]; 3]>>,
@@ -36,7 +57,7 @@ pub(crate) struct Facets {
 
 impl Facets {
     /// The triangles of `job`'s mesh in its image.
-    pub(crate) fn of(job: &RenderJob<'_>) -> Self {
+    fn of(job: &RenderJob<'_>) -> Self {
         let fan = Fan::of(job);
         let mut out = Self {
             corners: Vec::with_capacity(fan.corners.len()),
@@ -103,16 +124,17 @@ const EMPTY_PART: Part = Part {
     tri: u32::MAX,
 };
 
-/// The parts of pixel (x, y) of one image (its image, triangles and footprints): its
-/// footprint's, or where that is [`Footprint::Mixed`], each triangle seen about it within
-/// its three edges (written into `buf`); `None` where it sees no surface.
+/// The parts of pixel (x, y) of one image (`planes`): its footprint's, or where that is
+/// [`Footprint::Mixed`], each triangle seen about it within its three edges (written into
+/// `buf`); `None` where it sees no surface.
 fn parts_at<'b>(
-    (img, facets, prints): (&DepthImage, &Facets, &'b Footprints),
+    planes: &'b Planes<'_>,
     x: i64,
     y: i64,
     buf: &'b mut [Part; 9],
 ) -> Option<&'b [Part]> {
-    match prints.at(x, y)? {
+    let (img, facets) = (planes.img, &planes.facets);
+    match planes.prints.at(x, y)? {
         Footprint::Parts { parts, n } => Some(&parts[..usize::from(*n)]),
         Footprint::Mixed => {
             let mut tris = [0; 9];
@@ -180,7 +202,7 @@ enum Footprint {
 }
 
 /// One image's [`Footprint`] at each of its pixels; `None` where it sees no surface.
-pub(crate) struct Footprints {
+struct Footprints {
     width: usize,
     height: usize,
     cells: Vec<Option<Footprint>>,
@@ -188,7 +210,7 @@ pub(crate) struct Footprints {
 
 impl Footprints {
     /// The footprints of image `img` of the triangles `facets`.
-    pub(crate) fn of(img: &DepthImage, facets: &Facets) -> Self {
+    fn of(img: &DepthImage, facets: &Facets) -> Self {
         let (width, height) = (img.window.width, img.window.height);
         let edges = EdgesAt::of(facets, width, height);
         let cells = (0..width * height)
@@ -533,12 +555,12 @@ impl Polygon {
     }
 }
 
-/// A's and B's images, their triangles and footprints, and where B lies under A.
+/// A's and B's images with their planes, and B's normals.
 pub(crate) struct Overlay<'a> {
-    /// A's image, its triangles and their footprints.
-    pub a: (&'a DepthImage, &'a Facets, &'a Footprints),
+    /// A's image and its planes.
+    pub a: &'a Planes<'a>,
     /// B's.
-    pub b: (&'a DepthImage, &'a Facets, &'a Footprints),
+    pub b: &'a Planes<'a>,
     /// B's triangle normals in view coordinates.
     pub b_normals: &'a [[f32; 3]],
 }
@@ -642,7 +664,7 @@ pub(crate) fn exact_contact(
     tolerance: f32,
     scratch: &mut Flood,
 ) -> Option<ContactSummary> {
-    let (aw, bw) = (o.a.0.window, o.b.0.window);
+    let (aw, bw) = (o.a.img.window, o.b.img.window);
     let off = [aw.i0 - shift.du - bw.i0, aw.j0 - shift.dv - bw.j0];
     let (w, h) = (aw.width, aw.height);
     let tol = f64::from(tolerance);
@@ -792,14 +814,10 @@ mod tests {
                 .contacts(&ai, &bi, &normals, &[shift], tolerance)
                 .expect("reduces")
                 .remove(0);
-            let facets = jobs.map(|j| Facets::of(&j));
-            let prints = [
-                Footprints::of(&ai, &facets[0]),
-                Footprints::of(&bi, &facets[1]),
-            ];
+            let planes = [Planes::of(&jobs[0], &ai), Planes::of(&jobs[1], &bi)];
             let overlay = Overlay {
-                a: (&ai, &facets[0], &prints[0]),
-                b: (&bi, &facets[1], &prints[1]),
+                a: &planes[0],
+                b: &planes[1],
                 b_normals: &normals,
             };
             let c = exact_contact(&overlay, shift, &seed, tolerance, &mut Flood::default())
