@@ -13,7 +13,9 @@ use std::time::Instant;
 use ftmap::Task;
 use ftmap::depth::cpu::CpuBackend;
 use ftmap::depth::gpu::GpuBackend;
-use ftmap::depth::{DepthBackend, DepthImage, PixelWindow, RenderJob, Shift, Surface, View};
+use ftmap::depth::{
+    DepthBackend, DepthImage, ON_EDGE_HEIGHT, PixelWindow, RenderJob, Shift, Surface, View,
+};
 use ftmap::generate::{GenerateOptions, generate};
 use ftmap::map::parity;
 use ftmap::mesh::Mesh;
@@ -161,13 +163,16 @@ fn gpu() -> Option<GpuBackend> {
             eprintln!("GPU parity on {}", g.name());
             Some(g)
         }
-        Err(e) => {
+        // Only a missing adapter is a missing prerequisite: a shader or pipeline the
+        // adapter refuses is a fault of the backend.
+        Err(e) if e.to_string().contains("no Vulkan adapter") => {
             prerequisite::missing(
                 &format!("no Vulkan adapter for GPU parity: {e}"),
                 "scripts/setup.sh installs Mesa's lavapipe",
             );
             None
         }
+        Err(e) => panic!("the GPU backend fails to start: {e}"),
     }
 }
 
@@ -179,20 +184,39 @@ fn compare(job: &RenderJob<'_>, cpu: &DepthImage, gpu: &DepthImage) -> (usize, u
     );
     let normal = |t: u32| job.pose * job.mesh.normal(t as usize);
     let (mut mismatched, mut max_err) = (0, 0.0f32);
+    let width = cpu.window.width;
+    let mut mismatch = |k: usize| {
+        if mismatched < 5 {
+            eprintln!(
+                "  mismatch at column {} row {}: CPU height {:e} triangle {}, GPU {:e} triangle {}",
+                k % width,
+                k / width,
+                cpu.height[k],
+                cpu.tri[k],
+                gpu.height[k],
+                gpu.tri[k]
+            );
+        }
+        mismatched += 1;
+    };
     for k in 0..cpu.height.len() {
         let (hc, hg) = (cpu.height[k], gpu.height[k]);
         match (hc.is_finite(), hg.is_finite()) {
             (true, true) => {
                 max_err = max_err.max((hc - hg).abs());
-                // On an edge shared by two triangles either may win: fine when they face alike.
+                // On an edge shared by two triangles either may win: fine when they face
+                // alike, or where the two planes meet there, each at the pixel's height up
+                // to the coverage rule's rounding (a ridge, each backend rounding the
+                // steeper face's tolerance its own way).
                 if cpu.tri[k] != gpu.tri[k]
                     && normal(cpu.tri[k]).dot(&normal(gpu.tri[k])) < 1.0 - 1e-9
+                    && f64::from((hc - hg).abs()) > 2.0 * ON_EDGE_HEIGHT
                 {
-                    mismatched += 1;
+                    mismatch(k);
                 }
             }
             (false, false) => assert_eq!((hc, gpu.tri[k]), (hg, u32::MAX), "empty pixels agree"),
-            _ => mismatched += 1,
+            _ => mismatch(k),
         }
     }
     (cpu.covered(), mismatched, max_err)

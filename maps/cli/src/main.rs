@@ -4,7 +4,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::builder::BoolishValueParser;
+use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use ftmap::depth::DepthBackend;
@@ -77,7 +78,7 @@ enum Cmd {
         #[arg(long, conflicts_with = "shard")]
         centre: Option<PathBuf>,
         /// Fail when the GPU backend finds only a CPU adapter (e.g. lavapipe).
-        #[arg(long, env = "FTMAP_REQUIRE_GPU")]
+        #[arg(long, env = "FTMAP_REQUIRE_GPU", action = ArgAction::SetTrue, value_parser = BoolishValueParser::new())]
         require_gpu: bool,
     },
     /// Prints a map file's header: task, model, grid, channels and their ranges.
@@ -113,7 +114,7 @@ enum Cmd {
         #[arg(long, value_enum, default_value = "centroid")]
         model: ModelArg,
         /// Fail when the GPU backend finds only a CPU adapter.
-        #[arg(long, env = "FTMAP_REQUIRE_GPU")]
+        #[arg(long, env = "FTMAP_REQUIRE_GPU", action = ArgAction::SetTrue, value_parser = BoolishValueParser::new())]
         require_gpu: bool,
     },
     /// Corrects a computed map by a sparse measured one (`harness scan --step`): the residual
@@ -420,13 +421,7 @@ fn cmd_verify(
             )
         })
     };
-    let coords = |c: &ftmap::verify::CellCheck| -> String {
-        let axes = map.grid().axes().iter().zip(&c.coords);
-        let named: Vec<String> = axes
-            .map(|(a, x)| format!("{}={}", a.dof, a.dof.display(*x)))
-            .collect();
-        named.join(" ")
-    };
+    let coords = |c: &ftmap::verify::CellCheck| describe_cell(&map, &c.coords);
     let mm = |p: Option<[f64; 2]>| {
         p.map_or("-".into(), |[u, v]| {
             format!("({:+.4}, {:+.4}) mm", u * 1e3, v * 1e3)
@@ -511,14 +506,14 @@ fn make_backend(kind: BackendKind, require_gpu: bool) -> Result<Box<dyn DepthBac
         }
         #[cfg(feature = "gpu")]
         BackendKind::Gpu => {
-            let gpu = ftmap::depth::gpu::GpuBackend::new().context("starting the GPU backend")?;
-            eprintln!("GPU adapter: {}", gpu.name());
-            if require_gpu && gpu.is_cpu_adapter() {
-                bail!(
-                    "a GPU was required but the adapter found is a CPU one ({}): is the GPU's Vulkan driver (ICD) installed?",
-                    gpu.name()
-                );
+            use ftmap::depth::gpu::GpuBackend;
+            let gpu = if require_gpu {
+                GpuBackend::new_require_gpu()
+            } else {
+                GpuBackend::new()
             }
+            .context("starting the GPU backend")?;
+            eprintln!("GPU adapter: {}", gpu.name());
             Box::new(gpu)
         }
     })
@@ -787,10 +782,33 @@ fn cmd_bench(
                     1e6 * p.max_lever,
                     1e6 * p.max_depth,
                 );
+                for &cell in &p.differing {
+                    let at = r.grid().coords(cell);
+                    let forces = [r, &map].map(|m| {
+                        let c = m.cell(cell);
+                        format!("({:.3}, {:.3}, {:.3}) N", c[0], c[1], c[2])
+                    });
+                    println!(
+                        "{:<40} differs at {}: force {} against {}",
+                        "",
+                        describe_cell(r, &at),
+                        forces[0],
+                        forces[1]
+                    );
+                }
             }
         }
     }
     Ok(())
+}
+
+/// A cell's coordinates `at` as its axes' names and values in mm and degrees.
+fn describe_cell(map: &FtMap, at: &[f64]) -> String {
+    let axes = map.grid().axes().iter().zip(at);
+    let named: Vec<String> = axes
+        .map(|(a, x)| format!("{}={}", a.dof, a.dof.display(*x)))
+        .collect();
+    named.join(" ")
 }
 
 fn cmd_merge(shards: &[PathBuf], out: &Path) -> Result<()> {

@@ -476,3 +476,48 @@ fn a_reader_that_goes_away_ends_the_output_without_a_panic() {
     assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "{:?}", out.status);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `FTMAP_REQUIRE_GPU=1` (as the docs write it) is read as asking for a GPU: where the only
+/// Vulkan adapter is a CPU one (lavapipe, as in CI) the GPU backend is refused by name; on
+/// a real GPU the map is computed there. `0` asks for nothing, and other words are refused.
+#[test]
+fn the_require_gpu_variable_reads_as_the_docs_write_it() {
+    let (dir, task) = scratch("require");
+    let run = |value: &str| {
+        Command::new(env!("CARGO_BIN_EXE_ftmap"))
+            .args(["generate", "--backend", "gpu", "--task"])
+            .arg(&task)
+            .arg("--out")
+            .arg(dir.join("m.ftmap"))
+            .env("FTMAP_REQUIRE_GPU", value)
+            .output()
+            .expect("ftmap runs")
+    };
+    let out = run("1");
+    let err = String::from_utf8_lossy(&out.stderr);
+    if out.status.success() {
+        let adapter = err.lines().find(|l| l.starts_with("GPU adapter:"));
+        assert!(
+            adapter.is_some_and(|l| !l.contains("(Cpu)")),
+            "a GPU was required, yet: {err}"
+        );
+    } else {
+        assert!(
+            err.contains("a GPU was required") || err.contains("no Vulkan adapter"),
+            "{err}"
+        );
+    }
+    let out = run("no");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !err.contains("a GPU was required") && !err.contains("invalid value"),
+        "{err}"
+    );
+    let out = run("perhaps");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("invalid value 'perhaps' for '--require-gpu'"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -12,7 +12,7 @@ use crate::map::{FtMap, NCH};
 const FORCE_AGREES: f64 = 1e-3;
 
 /// What [`compare`] finds.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Parity {
     /// Cells compared.
     pub cells: usize,
@@ -27,7 +27,12 @@ pub struct Parity {
     pub max_lever: f64,
     /// The largest difference of the depth channel (m).
     pub max_depth: f64,
+    /// The first [`EXAMPLES`] cells (flat indices) whose contact differs.
+    pub differing: Vec<usize>,
 }
+
+/// How many differing cells [`Parity::differing`] names.
+pub const EXAMPLES: usize = 5;
 
 /// Compares `b` against `a` cell by cell; both must share one grid.
 pub fn compare(a: &FtMap, b: &FtMap) -> Result<Parity> {
@@ -38,7 +43,12 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Parity> {
     }
     let pixel = a.meta().pixel;
     let mut p = Parity::default();
-    for (x, y) in a.data().chunks_exact(NCH).zip(b.data().chunks_exact(NCH)) {
+    for (cell, (x, y)) in a
+        .data()
+        .chunks_exact(NCH)
+        .zip(b.data().chunks_exact(NCH))
+        .enumerate()
+    {
         p.cells += 1;
         p.max_depth = p.max_depth.max(f64::from((x[6] - y[6]).abs()));
         let vec = |c: &[f32], k: usize| Vector3::new(c[k], c[k + 1], c[k + 2]).cast::<f64>();
@@ -46,6 +56,9 @@ pub fn compare(a: &FtMap, b: &FtMap) -> Result<Parity> {
         let agree = FORCE_AGREES * fa.norm().max(fb.norm()).max(1.0);
         if (fa.norm() > 0.0) != (fb.norm() > 0.0) || (fa - fb).amax() > agree {
             p.contact_differs += 1;
+            if p.differing.len() < EXAMPLES {
+                p.differing.push(cell);
+            }
             continue;
         }
         if fa.norm() == 0.0 {
@@ -89,6 +102,7 @@ mod tests {
         c.data_mut()[..6].fill(0.0);
         let p = compare(&a, &c).unwrap();
         assert_eq!((p.contact_differs, p.lever_over_pixel), (1, 0));
+        assert_eq!(p.differing, vec![0]);
         assert!((p.max_lever - 0.5 * pixel).abs() < 1e-2 * pixel, "{p:?}");
         assert_eq!(compare(&a, &a).unwrap().max_lever, 0.0);
     }

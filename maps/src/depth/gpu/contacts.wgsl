@@ -10,9 +10,12 @@
 // `rows`).
 // Empty pixels arrive as sentinels (A: 1e30, B: -1e30): WGSL has no infinities.
 //
-// Output per shift s: head[8 s ..] = ordered gap (0xffffffff: no overlap), count,
-// f32 bits of sum col, sum row, sum height, sum normal (3); rows[2 ha s + 2 r] = !first
-// (0: no contact in row r), rows[2 ha s + 2 r + 1] = last + 1.
+// Output per shift s: head[11 s ..] = ordered gap (0xffffffff: no overlap), count,
+// f32 bits of sum col, sum row, sum height, sum normal (3), first row with a contact r0,
+// last + 1 r1, and where its rows start in `dense`. Per A row r (scratch, zeroed by the
+// caller): rows[2 ha s + 2 r] = !first (0: no contact in row r), rows[2 ha s + 2 r + 1] =
+// last + 1; the rows r0..r1 of it are then copied to `dense` at a place taken from
+// `taken`, so that the caller reads them in one piece.
 
 struct Params {
     wa: u32,
@@ -39,6 +42,9 @@ struct Params {
 @group(0) @binding(6) var<storage, read> offs: array<vec2<i32>>;
 @group(0) @binding(7) var<storage, read_write> head: array<u32>;
 @group(0) @binding(8) var<storage, read_write> rows: array<u32>;
+@group(0) @binding(9) var<storage, read_write> dense: array<u32>;
+// Words of `dense` taken so far (the caller zeroes it).
+@group(0) @binding(10) var<storage, read_write> taken: array<atomic<u32>>;
 
 const WG: u32 = 64u;
 const ROW_MINS: u32 = 32u;
@@ -49,6 +55,9 @@ const NONE: u32 = 0xffffffffu;
 var<workgroup> wg_min: atomic<u32>;
 var<workgroup> wg_gap: u32;
 var<workgroup> wg_count: atomic<u32>;
+var<workgroup> wg_row_lo: atomic<u32>;
+var<workgroup> wg_row_hi: atomic<u32>;
+var<workgroup> wg_base: u32;
 var<workgroup> red_pos: array<vec3<f32>, WG>;
 var<workgroup> red_nrm: array<vec3<f32>, WG>;
 
@@ -71,6 +80,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     if t == 0u {
         atomicStore(&wg_min, NONE);
         atomicStore(&wg_count, 0u);
+        atomicStore(&wg_row_lo, NONE);
+        atomicStore(&wg_row_hi, 0u);
     }
     workgroupBarrier();
 
@@ -110,9 +121,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         wg_gap = atomicLoad(&wg_min);
     }
     let gap = workgroupUniformLoad(&wg_gap);
-    let out = s * 8u;
+    let out = s * 11u;
     if gap == NONE {
-        if t < 8u {
+        if t < 11u {
             head[out + t] = select(0u, NONE, t == 0u);
         }
         return;
@@ -123,6 +134,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     var cnt = 0u;
     var pos = vec3<f32>(0.0);
     var nrm = vec3<f32>(0.0);
+    var row_lo = NONE;
+    var row_hi = 0u;
     let rbase = s * 2u * P.ha;
     k = 0u;
     for (var r = r0 + i32(t); r < r1; r += i32(WG)) {
@@ -153,9 +166,13 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         if last != 0u {
             rows[rbase + 2u * u32(r)] = ~first;
             rows[rbase + 2u * u32(r) + 1u] = last;
+            row_lo = min(row_lo, u32(r));
+            row_hi = u32(r) + 1u;
         }
     }
     atomicAdd(&wg_count, cnt);
+    atomicMin(&wg_row_lo, row_lo);
+    atomicMax(&wg_row_hi, row_hi);
     red_pos[t] = pos;
     red_nrm[t] = nrm;
     workgroupBarrier();
@@ -166,7 +183,18 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         }
         workgroupBarrier();
     }
+    // Every row of this shift written (storage, this workgroup): the contact rows are
+    // copied in one piece to a place of `dense` of their own.
+    storageBarrier();
+    // The minimum's row is a contact row, so first < last; kept safe anyway.
+    let first = atomicLoad(&wg_row_lo);
+    let last = max(atomicLoad(&wg_row_hi), first);
     if t == 0u {
+        let base = atomicAdd(&taken[0], 2u * (last - first));
+        wg_base = base;
+        head[out + 8u] = first;
+        head[out + 9u] = last;
+        head[out + 10u] = base;
         head[out] = gap;
         head[out + 1u] = atomicLoad(&wg_count);
         head[out + 2u] = bitcast<u32>(red_pos[0].x);
@@ -175,5 +203,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         head[out + 5u] = bitcast<u32>(red_nrm[0].x);
         head[out + 6u] = bitcast<u32>(red_nrm[0].y);
         head[out + 7u] = bitcast<u32>(red_nrm[0].z);
+    }
+    let base = workgroupUniformLoad(&wg_base);
+    for (var i = t; i < 2u * (last - first); i += WG) {
+        dense[base + i] = rows[rbase + 2u * first + i];
     }
 }

@@ -14,9 +14,8 @@
 //! Heights are written as an R32Float colour (the depth buffer only decides visibility),
 //! so they agree with the CPU to f32 rounding (~1e-9 m for parts of centimetres).
 
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError, mpsc};
-
-use wgpu::util::DeviceExt;
 
 use crate::depth::edge_function as edge;
 use crate::depth::{
@@ -35,6 +34,10 @@ const MAX_TILE: u32 = 4096;
 const A_SENTINEL: f32 = 1e30;
 /// Upload value of an empty B pixel.
 const B_SENTINEL: f32 = -1e30;
+/// Words of a shift's head in the contact shader's output: ordered gap, count, sums of
+/// column, row, height and normal (3), first contact row, last + 1, and where its rows
+/// start among the contact rows read back.
+const HEAD_WORDS: usize = 11;
 /// Largest output buffer of one contact dispatch batch (bytes).
 const MAX_BATCH_BYTES: u64 = 64 << 20;
 
@@ -53,6 +56,9 @@ pub struct GpuBackend {
     uncaptured: Arc<Mutex<Option<String>>>,
     /// One GPU operation at a time: error scopes are per device, and the queue is one.
     serial: Mutex<()>,
+    /// Buffers kept between operations by role, so that a map's thousands of renders and
+    /// reductions reuse device and read-back memory rather than allocate it each time.
+    pool: Mutex<HashMap<&'static str, wgpu::Buffer>>,
 }
 
 fn gpu_err(context: &str, e: impl std::fmt::Display) -> MapError {
@@ -133,6 +139,7 @@ impl GpuBackend {
             contact_pipeline,
             uncaptured,
             serial: Mutex::new(()),
+            pool: Mutex::new(HashMap::new()),
         })
     }
 
@@ -144,42 +151,68 @@ impl GpuBackend {
         let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
         let out = op();
         let errors = [internal.pop(), memory.pop(), validation.pop()].map(pollster::block_on);
-        if let Some(e) = errors.into_iter().flatten().next() {
-            return Err(gpu_err(what, e));
-        }
-        if let Some(e) = self
+        let error = errors.into_iter().flatten().next().map(|e| e.to_string());
+        let uncaptured = self
             .uncaptured
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
-            .take()
-        {
-            return Err(gpu_err(what, e));
+            .take();
+        let out = match error.or(uncaptured) {
+            Some(e) => Err(gpu_err(what, e)),
+            None => out.map_err(|e| match e {
+                MapError::Gpu(m) => MapError::Gpu(format!("{what}: {m}")),
+                other => other,
+            }),
+        };
+        if out.is_err() {
+            // A failed operation may leave a pooled buffer mapped or half written.
+            self.pool
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .clear();
         }
-        out.map_err(|e| match e {
-            MapError::Gpu(m) => MapError::Gpu(format!("{what}: {m}")),
-            other => other,
-        })
+        out
     }
 
-    /// A buffer holding `data`, at least 16 bytes (wgpu refuses empty bindings).
-    fn upload(&self, label: &str, data: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
-        let mut bytes = data.to_vec();
-        bytes.resize(bytes.len().max(16).next_multiple_of(4), 0);
-        self.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &bytes,
-                usage,
-            })
+    /// The pooled buffer of role `label` with at least `size` bytes (16 at least: wgpu
+    /// refuses empty bindings); a larger one (to the next power of two or MiB) replaces a
+    /// smaller.
+    fn pooled(&self, label: &'static str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        let size = size.max(16).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        let mut pool = self.pool.lock().unwrap_or_else(PoisonError::into_inner);
+        match pool.get(label) {
+            Some(b) if b.size() >= size && b.usage() == usage => b.clone(),
+            _ => {
+                let b = self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: size.next_power_of_two().min(size.next_multiple_of(1 << 20)),
+                    usage,
+                    mapped_at_creation: false,
+                });
+                pool.insert(label, b.clone());
+                b
+            }
+        }
     }
 
-    fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
-        self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: size.max(16),
-            usage,
-            mapped_at_creation: false,
-        })
+    /// The pooled buffer of role `label` holding `data` from its start, written through the
+    /// queue (so before the next submission's commands run).
+    fn upload(&self, label: &'static str, data: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        let buffer = self.pooled(
+            label,
+            data.len() as u64,
+            usage | wgpu::BufferUsages::COPY_DST,
+        );
+        let whole = data.len() - data.len() % 4;
+        if whole > 0 {
+            self.queue.write_buffer(&buffer, 0, &data[..whole]);
+        }
+        if whole < data.len() {
+            let mut tail = [0u8; 4];
+            tail[..data.len() - whole].copy_from_slice(&data[whole..]);
+            self.queue.write_buffer(&buffer, whole as u64, &tail);
+        }
+        buffer
     }
 
     fn check_binding(&self, what: &str, bytes: u64) -> Result<()> {
@@ -195,17 +228,19 @@ impl GpuBackend {
         Ok(())
     }
 
-    /// Submits `encoder`, waits, and returns the contents of the (MAP_READ) buffers.
-    fn finish_and_read(
+    /// Submits `encoder`, waits, and passes `read` the first `len` bytes of each (MAP_READ)
+    /// buffer of `buffers`, read in place.
+    fn finish_and_read<T>(
         &self,
         encoder: wgpu::CommandEncoder,
-        buffers: &[&wgpu::Buffer],
-    ) -> Result<Vec<Vec<u8>>> {
+        buffers: &[(&wgpu::Buffer, u64)],
+        read: impl FnOnce(&[&[u8]]) -> T,
+    ) -> Result<T> {
         self.queue.submit([encoder.finish()]);
         let (tx, rx) = mpsc::channel();
-        for (k, b) in buffers.iter().enumerate() {
+        for (k, (b, len)) in buffers.iter().enumerate() {
             let tx = tx.clone();
-            b.map_async(wgpu::MapMode::Read, .., move |r| {
+            b.map_async(wgpu::MapMode::Read, ..*len, move |r| {
                 // The receiver outlives the poll below; a failed send cannot happen.
                 let _ = tx.send((k, r));
             });
@@ -225,27 +260,30 @@ impl GpuBackend {
                 buffers.len()
             )));
         }
-        buffers
+        let views = buffers
             .iter()
-            .map(|b| {
-                let bytes = b
-                    .get_mapped_range(..)
-                    .map_err(|e| gpu_err("reading a mapped buffer", e))?
-                    .to_vec();
-                b.unmap();
-                Ok(bytes)
+            .map(|(b, len)| {
+                b.get_mapped_range(..*len)
+                    .map_err(|e| gpu_err("reading a mapped buffer", e))
             })
-            .collect()
+            .collect::<Result<Vec<_>>>()?;
+        let out = read(&views.iter().map(|v| &v[..]).collect::<Vec<_>>());
+        drop(views);
+        for (b, _) in buffers {
+            b.unmap();
+        }
+        Ok(out)
     }
 
-    fn render_image(&self, job: &RenderJob<'_>) -> Result<DepthImage> {
+    /// Draws `job`'s triangle `records` (heights `hmin..hmax`) into `img`, tile by tile.
+    fn draw(
+        &self,
+        job: &RenderJob<'_>,
+        (records, hmin, hmax): &(Vec<[f32; TRI_FLOATS]>, f64, f64),
+        img: &mut DepthImage,
+    ) -> Result<()> {
         let win = job.window;
-        let mut img = DepthImage::empty(win, job.pixel, job.surface);
-        if win.is_empty() || job.mesh.faces.is_empty() {
-            return Ok(img);
-        }
-        let (records, hmin, hmax) = triangle_records(job);
-        let bytes: &[u8] = bytemuck::cast_slice(&records);
+        let bytes: &[u8] = bytemuck::cast_slice(records);
         self.check_binding("the triangle records", bytes.len() as u64)?;
         let vertices = u32::try_from(job.mesh.faces.len() * 3).map_err(|_| {
             MapError::Gpu(format!(
@@ -254,6 +292,7 @@ impl GpuBackend {
             ))
         })?;
         let tris = self.upload("triangles", bytes, wgpu::BufferUsages::STORAGE);
+        let (hmin, hmax) = (*hmin, *hmax);
         let half_range = if hmax > hmin {
             0.5 / (hmax - hmin)
         } else {
@@ -277,17 +316,17 @@ impl GpuBackend {
                     d0,
                     0.0,
                 ];
-                self.render_tile(&tris, vertices, &tile, (tx, ty, tw, th), &mut img)?;
+                let tris = (&tris, bytes.len() as u64);
+                self.render_tile(tris, vertices, &tile, (tx, ty, tw, th), img)?;
             }
         }
-        outline_coverage(job, &mut img);
-        Ok(img)
+        Ok(())
     }
 
     /// Renders the tile (x, y, width, height) of the window into `img`.
     fn render_tile(
         &self,
-        tris: &wgpu::Buffer,
+        (tris, tri_bytes): (&wgpu::Buffer, u64),
         vertices: u32,
         tile: &[f32; 8],
         (tx, ty, tw, th): (usize, usize, usize, usize),
@@ -333,15 +372,20 @@ impl GpuBackend {
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: tris.as_entire_binding(),
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: tris,
+                        offset: 0,
+                        size: std::num::NonZeroU64::new(tri_bytes.next_multiple_of(4)),
+                    }),
                 },
             ],
         });
         let row_bytes = (tw as u32 * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let read_bytes = u64::from(row_bytes) * th as u64;
         let readback = |label| {
-            self.buffer(
+            self.pooled(
                 label,
-                u64::from(row_bytes) * th as u64,
+                read_bytes,
                 wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             )
         };
@@ -398,35 +442,34 @@ impl GpuBackend {
                 size,
             );
         }
-        let out = self.finish_and_read(encoder, &[&height_out, &tri_out])?;
-        let (heights, tris): (&[f32], &[u32]) =
-            (bytemuck::cast_slice(&out[0]), bytemuck::cast_slice(&out[1]));
-        let (row_words, width) = (row_bytes as usize / 4, img.window.width);
-        for r in 0..th {
-            for c in 0..tw {
-                let (src, dst) = (r * row_words + c, (ty + r) * width + tx + c);
-                // Pixels without a fragment keep the image's empty value.
-                if let Some(t) = tris[src].checked_sub(1) {
-                    img.height[dst] = heights[src];
-                    img.tri[dst] = t;
+        let read = [(&height_out, read_bytes), (&tri_out, read_bytes)];
+        self.finish_and_read(encoder, &read, |out| {
+            let (heights, tris): (&[f32], &[u32]) =
+                (bytemuck::cast_slice(out[0]), bytemuck::cast_slice(out[1]));
+            let (row_words, width) = (row_bytes as usize / 4, img.window.width);
+            for r in 0..th {
+                for c in 0..tw {
+                    let (src, dst) = (r * row_words + c, (ty + r) * width + tx + c);
+                    // Pixels without a fragment keep the image's empty value.
+                    if let Some(t) = tris[src].checked_sub(1) {
+                        img.height[dst] = heights[src];
+                        img.tri[dst] = t;
+                    }
                 }
             }
-        }
-        Ok(())
+        })
     }
 
-    fn contact_summaries(
+    /// The contact shader's output for every shift of B against A, per batch of shifts:
+    /// their heads and their contact rows, copied out of the read-back buffers ([`decode`]).
+    fn reduce(
         &self,
         a: &DepthImage,
         b: &DepthImage,
         b_normals: &[[f32; 3]],
         shifts: &[Shift],
         tolerance: f32,
-    ) -> Result<Vec<ContactSummary>> {
-        let none = ContactSummary::none(f32::INFINITY);
-        if shifts.is_empty() || a.window.is_empty() || b.window.is_empty() {
-            return Ok(vec![none; shifts.len()]);
-        }
+    ) -> Result<Vec<(Vec<u32>, Vec<u32>)>> {
         for (name, img) in [("A", a), ("B", b)] {
             if img.height.len() != img.window.len() || img.tri.len() != img.window.len() {
                 return Err(MapError::Geometry(format!(
@@ -490,7 +533,7 @@ impl GpuBackend {
         ];
 
         // Batches: outputs within the binding limit, workgroups within the dispatch limit.
-        let per_shift = 4 * (8 + 2 * ha as u64);
+        let per_shift = 4 * (HEAD_WORDS as u64 + 2 * ha as u64);
         let max_bytes = self
             .limits
             .max_storage_buffer_binding_size
@@ -506,13 +549,19 @@ impl GpuBackend {
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;
         let read_usage = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
-        let (head_bytes, rows_bytes) = (batch as u64 * 32, batch as u64 * 8 * ha as u64);
-        let head = self.buffer("contact heads", head_bytes, out_usage);
-        let rows = self.buffer("contact rows", rows_bytes, out_usage);
-        let head_read = self.buffer("contact heads read-back", head_bytes, read_usage);
-        let rows_read = self.buffer("contact rows read-back", rows_bytes, read_usage);
+        let (head_bytes, rows_bytes) = (
+            batch as u64 * 4 * HEAD_WORDS as u64,
+            batch as u64 * 8 * ha as u64,
+        );
+        let head = self.pooled("contact heads", head_bytes, out_usage);
+        let rows = self.pooled("contact rows", rows_bytes, out_usage);
+        let dense = self.pooled("contact rows in one piece", rows_bytes, out_usage);
+        let taken = self.pooled("contact rows taken", 4, out_usage);
+        let head_read = self.pooled("contact heads read-back", head_bytes, read_usage);
+        let taken_read = self.pooled("contact rows taken read-back", 4, read_usage);
+        let dense_read = self.pooled("contact rows read-back", rows_bytes, read_usage);
 
-        let mut out = Vec::with_capacity(shifts.len());
+        let mut out = Vec::new();
         for chunk in shifts.chunks(batch) {
             let offs: Vec<[i32; 2]> = chunk
                 .iter()
@@ -542,16 +591,34 @@ impl GpuBackend {
                 wgpu::BufferUsages::UNIFORM,
             );
             let offs = self.upload("shift offsets", bytemuck::cast_slice(&offs), storage);
+            let (used_head, used_rows) = (
+                u64::from(n) * 4 * HEAD_WORDS as u64,
+                u64::from(n) * 8 * ha as u64,
+            );
+            // Each bound over the bytes it holds: a pooled buffer may be larger.
             let resources = [
-                &params, &inputs[0], &inputs[1], &inputs[2], &inputs[3], &inputs[4], &offs, &head,
-                &rows,
+                (&params, 32),
+                (&inputs[0], a_h.len() as u64 * 4),
+                (&inputs[1], spans.len() as u64 * 8),
+                (&inputs[2], b_h.len() as u64 * 4),
+                (&inputs[3], b.tri.len() as u64 * 4),
+                (&inputs[4], b_normals.len() as u64 * 12),
+                (&offs, u64::from(n) * 8),
+                (&head, used_head),
+                (&rows, used_rows),
+                (&dense, used_rows),
+                (&taken, 4),
             ];
             let entries: Vec<wgpu::BindGroupEntry<'_>> = resources
                 .iter()
                 .enumerate()
-                .map(|(k, buf)| wgpu::BindGroupEntry {
+                .map(|(k, (buffer, bytes))| wgpu::BindGroupEntry {
                     binding: k as u32,
-                    resource: buf.as_entire_binding(),
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer,
+                        offset: 0,
+                        size: std::num::NonZeroU64::new(bytes.max(&16).next_multiple_of(4)),
+                    }),
                 })
                 .collect();
             let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -564,7 +631,8 @@ impl GpuBackend {
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("contacts"),
                 });
-            encoder.clear_buffer(&rows, 0, None);
+            encoder.clear_buffer(&rows, 0, Some(used_rows));
+            encoder.clear_buffer(&taken, 0, None);
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("contacts"),
@@ -574,21 +642,26 @@ impl GpuBackend {
                 pass.set_bind_group(0, &bind, &[]);
                 pass.dispatch_workgroups(nx, n.div_ceil(nx), 1);
             }
-            let used_rows = u64::from(n) * 8 * ha as u64;
-            encoder.copy_buffer_to_buffer(&head, 0, &head_read, 0, u64::from(n) * 32);
-            encoder.copy_buffer_to_buffer(&rows, 0, &rows_read, 0, used_rows);
-            let bytes = self.finish_and_read(encoder, &[&head_read, &rows_read])?;
-            let (heads, row_words): (&[u32], &[u32]) = (
-                bytemuck::cast_slice(&bytes[0]),
-                bytemuck::cast_slice(&bytes[1]),
-            );
-            for s in 0..chunk.len() {
-                out.push(decode(
-                    &heads[s * 8..s * 8 + 8],
-                    &row_words[s * 2 * ha..(s + 1) * 2 * ha],
-                    &none,
-                ));
-            }
+            encoder.copy_buffer_to_buffer(&head, 0, &head_read, 0, used_head);
+            encoder.copy_buffer_to_buffer(&taken, 0, &taken_read, 0, 4);
+            let words = self.finish_and_read(encoder, &[(&taken_read, 4)], |bytes| {
+                bytemuck::cast_slice::<u8, u32>(bytes[0])[0]
+            })?;
+            // Then the contact rows, as much of them as the shifts took (4 bytes at least).
+            let used_dense = (4 * u64::from(words)).clamp(4, used_rows);
+            let mut encoder = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("contact rows"),
+                });
+            encoder.copy_buffer_to_buffer(&dense, 0, &dense_read, 0, used_dense);
+            let read = [(&head_read, used_head), (&dense_read, used_dense)];
+            out.push(self.finish_and_read(encoder, &read, |bytes| {
+                (
+                    bytemuck::cast_slice::<u8, u32>(bytes[0]).to_vec(),
+                    bytemuck::cast_slice::<u8, u32>(bytes[1]).to_vec(),
+                )
+            })?);
         }
         Ok(out)
     }
@@ -600,7 +673,17 @@ impl DepthBackend for GpuBackend {
     }
 
     fn render(&self, job: &RenderJob<'_>) -> Result<DepthImage> {
-        self.guarded("rendering a depth image", || self.render_image(job))
+        let mut img = DepthImage::empty(job.window, job.pixel, job.surface);
+        if job.window.is_empty() || job.mesh.faces.is_empty() {
+            return Ok(img);
+        }
+        // The records and the outline on the CPU, outside the GPU's turn.
+        let records = triangle_records(job);
+        self.guarded("rendering a depth image", || {
+            self.draw(job, &records, &mut img)
+        })?;
+        outline_coverage(job, &mut img);
+        Ok(img)
     }
 
     fn contacts(
@@ -611,17 +694,34 @@ impl DepthBackend for GpuBackend {
         shifts: &[Shift],
         tolerance: f32,
     ) -> Result<Vec<ContactSummary>> {
-        self.guarded("reducing contacts", || {
-            self.contact_summaries(a, b, b_normals, shifts, tolerance)
-        })
+        let none = ContactSummary::none(f32::INFINITY);
+        if shifts.is_empty() || a.window.is_empty() || b.window.is_empty() {
+            return Ok(vec![none; shifts.len()]);
+        }
+        let batches = self.guarded("reducing contacts", || {
+            self.reduce(a, b, b_normals, shifts, tolerance)
+        })?;
+        // Decoded outside the GPU's turn, beside the other threads' use of it: the contact
+        // rows come in one piece, so that copying them out is short.
+        Ok(batches
+            .iter()
+            .flat_map(|(heads, dense)| {
+                (heads.chunks_exact(HEAD_WORDS)).map(|head| decode(head, dense, &none))
+            })
+            .collect())
     }
 }
 
-/// The summary of one shift from its 8 head words and its 2 x rows row words.
-fn decode(head: &[u32], rows: &[u32], none: &ContactSummary) -> ContactSummary {
+/// The summary of one shift from its [`HEAD_WORDS`] head words and the contact rows of
+/// every shift, `dense`, of which it reads its own: 2 words per row from its first contact
+/// row to its last, from where the head says.
+fn decode(head: &[u32], dense: &[u32], none: &ContactSummary) -> ContactSummary {
     if head[0] == u32::MAX {
         return none.clone();
     }
+    let (first, base) = (head[8] as usize, head[10] as usize);
+    let count = (head[9] as usize).saturating_sub(first);
+    let rows = dense.get(base..base + 2 * count).unwrap_or(&[]);
     let f = |k: usize| f64::from(f32::from_bits(head[k]));
     ContactSummary {
         gap: from_ordered(head[0]),
@@ -630,11 +730,9 @@ fn decode(head: &[u32], rows: &[u32], none: &ContactSummary) -> ContactSummary {
         sum_row: f(3),
         sum_height: f(4),
         sum_normal: [f(5), f(6), f(7)],
-        rows: rows
-            .chunks_exact(2)
-            .enumerate()
+        rows: (rows.chunks_exact(2).enumerate())
             .filter(|(_, fl)| fl[0] != 0)
-            .map(|(r, fl)| (r as u32, !fl[0], fl[1] - 1))
+            .map(|(k, fl)| ((first + k) as u32, !fl[0], fl[1] - 1))
             .collect(),
         deficit: 0.0,
     }
@@ -835,7 +933,7 @@ fn contact_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::Comp
     let cs = wgpu::ShaderStages::COMPUTE;
     let mut entries = vec![uniform_entry(cs)];
     entries.extend((1..=6).map(|b| storage_entry(b, cs, true)));
-    entries.extend((7..=8).map(|b| storage_entry(b, cs, false)));
+    entries.extend((7..=10).map(|b| storage_entry(b, cs, false)));
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("contacts"),
         entries: &entries,
@@ -917,10 +1015,9 @@ mod tests {
     #[test]
     fn decode_reads_rows_and_no_overlap() {
         let none = ContactSummary::none(f32::INFINITY);
-        assert_eq!(
-            decode(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0], &[0; 4], &none),
-            none
-        );
+        let mut head = [0; HEAD_WORDS];
+        head[0] = u32::MAX;
+        assert_eq!(decode(&head, &[0; 4], &none), none);
         let head = [
             to_ordered(-0.5),
             3,
@@ -930,8 +1027,13 @@ mod tests {
             0,
             0,
             3f32.to_bits(),
+            1,
+            3,
+            2,
         ];
-        let s = decode(&head, &[0, 0, !4, 7], &none);
+        // Rows 1 and 2 (row 2 without contact), from word 2 of the contact rows, where
+        // another shift's row precedes them and one more follows.
+        let s = decode(&head, &[!0, 1, !4, 7, 0, 0, !1, 2], &none);
         assert_eq!(
             (s.gap, s.count, s.sum_col, s.sum_normal[2]),
             (-0.5, 3, 6.0, 3.0)
