@@ -424,57 +424,15 @@ fn a_miss_tells_a_region_in_pieces_from_a_segment_of_the_rim() {
     }
 }
 
-#[test]
-fn the_tip_of_a_lens_between_two_rims_is_where_the_map_rests() {
-    // Part A's rim (r 4.95 mm) crossing the edge of part B's tilted hole (r 5 mm): the
-    // parts touch at the tip of the lens between the two circles, thinner than any pixel.
-    // Sampled at pixel centres, the map rested 6-17 um too high there (against a 2 um
-    // tolerance) with its lever up to 0.5 mm from the tip (map revision 11, docs/RESULTS.md);
-    // computed exactly within the pixels, both hold against parry's exact queries.
+/// Checks the 4-DOF peg map's cells nearest `coords` against parry's exact queries: each
+/// rests within the contact tolerance of the exact height, its lever within a pixel of the
+/// exact centroid.
+fn assert_exact_at(coords: &[[f64; 4]]) {
     let (task, map, [a, b]) = computed("peg_in_hole_4dof");
-    let deg = f64::to_radians;
-    let cells: Vec<usize> = [
-        [0.0008, 0.0001, deg(1.0), deg(-2.0)],
-        [-0.0015, 0.0011, deg(1.25), deg(2.0)],
-        [0.0002, 0.0005, deg(1.75), deg(-1.0)],
-    ]
-    .iter()
-    .map(|c| map.grid().nearest(c).expect("in the map"))
-    .collect();
-    let v = verify_cells(&map, &task, [&a, &b], &cells, 1).expect("verifiable");
-    for c in &v.checks {
-        assert!(
-            c.depth_error.abs() <= task.depth.tolerance,
-            "cell {}: depth {:.2} um off",
-            c.cell,
-            c.depth_error * 1e6
-        );
-        let error = c.centroid_error.expect("a centroid map");
-        assert!(
-            error <= task.depth.pixel,
-            "cell {}: lever {:.0} um from the exact centroid",
-            c.cell,
-            error * 1e6
-        );
-    }
-}
-
-#[test]
-fn a_contact_in_two_caps_far_apart_rests_between_them_by_their_areas() {
-    // Part A's flat bottom tilted on part B's top, its rim across the hole's: the parts touch
-    // at two caps millimetres apart at nearly one height, each a few finer pixels. Their
-    // pixels' counts weighed the centroid between them up to 181 um off the exact one (map
-    // revision 12, docs/RESULTS.md); computed exactly, their areas put it within a pixel.
-    let (task, map, [a, b]) = computed("peg_in_hole_4dof");
-    let deg = f64::to_radians;
-    let cells: Vec<usize> = [
-        [0.0027, -0.0095, deg(-1.75), deg(-0.5)],
-        [0.004, -0.0082, deg(-1.0), deg(-0.5)],
-        [0.0084, 0.001, deg(0.25), deg(-2.0)],
-    ]
-    .iter()
-    .map(|c| map.grid().nearest(c).expect("in the map"))
-    .collect();
+    let cells: Vec<usize> = coords
+        .iter()
+        .map(|c| map.grid().nearest(c).expect("in the map"))
+        .collect();
     let v = verify_cells(&map, &task, [&a, &b], &cells, 1).expect("verifiable");
     for c in &v.checks {
         let error = c.centroid_error.expect("a centroid map");
@@ -486,4 +444,33 @@ fn a_contact_in_two_caps_far_apart_rests_between_them_by_their_areas() {
             c.depth_error * 1e6
         );
     }
+}
+
+#[test]
+fn the_tip_of_a_lens_between_two_rims_is_where_the_map_rests() {
+    // Part A's rim (r 4.95 mm) crossing the edge of part B's tilted hole (r 5 mm): the
+    // parts touch at the tip of the lens between the two circles, thinner than any pixel.
+    // Sampled at pixel centres, the map rested 6-17 um too high there (against a 2 um
+    // tolerance) with its lever up to 0.5 mm from the tip (map revision 11, docs/RESULTS.md);
+    // computed exactly within the pixels, both hold against parry's exact queries.
+    let deg = f64::to_radians;
+    assert_exact_at(&[
+        [0.0008, 0.0001, deg(1.0), deg(-2.0)],
+        [-0.0015, 0.0011, deg(1.25), deg(2.0)],
+        [0.0002, 0.0005, deg(1.75), deg(-1.0)],
+    ]);
+}
+
+#[test]
+fn a_contact_in_two_caps_far_apart_rests_between_them_by_their_areas() {
+    // Part A's flat bottom tilted on part B's top, its rim across the hole's: the parts touch
+    // at two caps millimetres apart at nearly one height, each a few finer pixels. Their
+    // pixels' counts weighed the centroid between them up to 181 um off the exact one (map
+    // revision 12, docs/RESULTS.md); computed exactly, their areas put it within a pixel.
+    let deg = f64::to_radians;
+    assert_exact_at(&[
+        [0.0027, -0.0095, deg(-1.75), deg(-0.5)],
+        [0.004, -0.0082, deg(-1.0), deg(-0.5)],
+        [0.0084, 0.001, deg(0.25), deg(-2.0)],
+    ]);
 }

@@ -372,11 +372,7 @@ impl GpuBackend {
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: tris,
-                        offset: 0,
-                        size: std::num::NonZeroU64::new(tri_bytes.next_multiple_of(4)),
-                    }),
+                    resource: bytes_of(tris, tri_bytes),
                 },
             ],
         });
@@ -614,11 +610,7 @@ impl GpuBackend {
                 .enumerate()
                 .map(|(k, (buffer, bytes))| wgpu::BindGroupEntry {
                     binding: k as u32,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer,
-                        offset: 0,
-                        size: std::num::NonZeroU64::new(bytes.max(&16).next_multiple_of(4)),
-                    }),
+                    resource: bytes_of(buffer, *bytes),
                 })
                 .collect();
             let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -710,6 +702,16 @@ impl DepthBackend for GpuBackend {
             })
             .collect())
     }
+}
+
+/// The first `bytes` of `buffer` as a binding (16 at least, as [`GpuBackend::pooled`]
+/// sizes a buffer): a pooled buffer may be larger than what it holds.
+fn bytes_of(buffer: &wgpu::Buffer, bytes: u64) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset: 0,
+        size: std::num::NonZeroU64::new(bytes.max(16).next_multiple_of(4)),
+    })
 }
 
 /// The summary of one shift from its [`HEAD_WORDS`] head words and the contact rows of
