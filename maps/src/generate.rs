@@ -124,8 +124,9 @@ pub fn generate(
 /// thin regions refined on tilted parts too; 9: thin by the share of edge pixels too; 10:
 /// pixel centres within a thousandth of a pixel of a slanted edge covered; 11: pixels on
 /// the parts' outlines counted by the share of them covered; 12: the tips of tilted parts'
-/// contacts computed exactly; 13: and their regions in pieces).
-const MAP_REVISION: u32 = 13;
+/// contacts computed exactly; 13: and their regions in pieces; 14: every thin region of
+/// tilted parts computed exactly).
+const MAP_REVISION: u32 = 14;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and
@@ -374,59 +375,51 @@ impl Context<'_> {
             force: self.task.contact.force,
             friction: self.task.contact.friction,
         };
-        // Thin contact regions again at a finer pixel, over their own extent: a crescent
-        // along a rim where the faces stay parallel (the rotations turn the parts about the
-        // approach alone), a band the contact tolerance draws across the tilt where they do
-        // not (2 um across 2 degrees: 57 um, under the pixel), each sampled by a few pixels
-        // whose centroid strays from the region's by up to a few pixels.
+        // Thin contact regions again, over their own extent: where the faces stay parallel
+        // (the rotations turn the parts about the approach alone), a crescent along a rim at
+        // a finer pixel; where they do not, exactly ([`exact_contact`], from the coarse
+        // contact's pixels): a band the contact tolerance draws across the tilt (2 um across
+        // 2 degrees: 57 um, under the pixel), the tip of the lens where part A's rim crosses
+        // the edge of B's hole, caps millimetres apart where the two rims cross at nearly one
+        // height. A few coarse or finer pixels sample such a region; their centroid strays
+        // from the region's by up to a few pixels, their least gap from its own by up to
+        // 17 um at a 2 um tolerance (`ftmap verify`).
         let level = [r1 * a0, r2 * a0].iter().all(|a| (a - a0).norm() < 1e-9);
-        let refine = if level { REFINE } else { TILTED_REFINE };
         let thin = |c: &ContactSummary| {
             c.count > 0
                 && (c.count < THIN || c.mean_width() < THIN_WIDTH || c.edge_share() >= THIN_EDGES)
         };
-        // A tilted region in pieces goes to the exact computation below without a finer pass.
-        let apart: Vec<bool> = summaries
-            .iter()
-            .map(|c| !level && thin(c) && in_pieces(c))
-            .collect();
-        let windows: Vec<Option<[PixelWindow; 2]>> = (shifts.iter().zip(&summaries).zip(&apart))
-            .map(|((shift, c), &apart)| {
-                (thin(c) && !apart).then(|| Fine::windows(c, *shift, &setup, refine))
-            })
+        let exact: Vec<bool> = summaries.iter().map(|c| !level && thin(c)).collect();
+        let windows: Vec<Option<[PixelWindow; 2]>> = (shifts.iter().zip(&summaries))
+            .map(|(shift, c)| (level && thin(c)).then(|| Fine::windows(c, *shift, &setup, REFINE)))
             .collect();
         let poses = [a_pose, b_pose];
-        let fine = Fine::render(self, view, poses, &windows, pixel, refine, &b_normals)?;
+        let fine = Fine::render(self, view, poses, &windows, pixel, REFINE, &b_normals)?;
         // Filled in place (every shift's slot known beforehand): a collection of unknown
-        // length would grow by copies, a large part of a map's time. Each thin region is
-        // reduced again at the finer pixel where it finds a contact there; the others'
-        // outline pixels are weighed here ([`weigh_outline`]). On tilted parts, a region of
-        // fewer than [`TIP_PIXELS`] finer pixels keeps its coarse contact, the seed of its
-        // exact one below (`tips`), as does one in pieces.
+        // length would grow by copies, a large part of a map's time. Each thin region of
+        // level parts is reduced again at the finer pixel where it finds a contact there;
+        // the others' outline pixels are weighed here ([`weigh_outline`]), but for the thin
+        // regions of tilted parts, whose coarse contact seeds their exact one below.
         let mut contacts: Vec<(ContactSummary, WrenchSetup)> =
             summaries.into_iter().map(|c| (c, setup)).collect();
-        let mut tips = apart;
         let (a_whole, b_whole) = (a_img.whole(), b_img.whole());
         (contacts
             .par_iter_mut()
-            .zip(&mut tips)
+            .zip(&exact)
             .zip(&shifts)
             .zip(&windows))
-        .for_each_init(InPlace::default, |scratch, (((slot, tip), shift), w)| {
-            if *tip {
-                return;
-            }
+        .filter(|(((_, exact), _), _)| !**exact)
+        .for_each_init(InPlace::default, |scratch, (((slot, _), shift), w)| {
             let finer = (fine.as_ref().zip(w.as_ref()))
                 .and_then(|(f, w)| f.contact(*shift, w, &setup, &b_normals, scratch));
             match finer {
-                Some(finer) if !level && finer.0.count < TIP_PIXELS => *tip = true,
                 Some(finer) => *slot = finer,
-                None => weigh_outline(&mut slot.0, a_whole, b_whole, &b_normals, *shift, tolerance),
+                None => {
+                    weigh_outline(&mut slot.0, a_whole, b_whole, &b_normals, *shift, tolerance);
+                }
             }
         });
-        if tips.contains(&true) {
-            // The tips and slivers of tilted parts, computed exactly within each coarse
-            // pixel from the coarse contact.
+        if exact.contains(&true) {
             let planes = [
                 Planes::of(&job(self.mesh_a, a_pose, Surface::Bottom, a_win), &a_img),
                 Planes::of(&job(self.mesh_b, b_pose, Surface::Top, b_win), &b_img),
@@ -436,8 +429,8 @@ impl Context<'_> {
                 b: &planes[1],
                 b_normals: &b_normals,
             };
-            (contacts.par_iter_mut().zip(&tips).zip(&shifts))
-                .filter(|((_, tip), _)| **tip)
+            (contacts.par_iter_mut().zip(&exact).zip(&shifts))
+                .filter(|((_, exact), _)| **exact)
                 .for_each_init(
                     Flood::default,
                     |flood, (((c, _), _), shift)| match exact_contact(
@@ -477,10 +470,10 @@ impl Context<'_> {
 }
 
 /// A contact region of fewer pixels than this, narrower than [`THIN_WIDTH`], or with
-/// [`THIN_EDGES`] of its pixels on its edges, is computed again [`REFINE`] (tilted:
-/// [`TILTED_REFINE`]) times finer: a crescent thinner than a pixel (part A resting on the
-/// rim just off the hole) is sampled by a few pixels along it, and their centroid strays
-/// from the region's by up to a few pixels (`ftmap verify`).
+/// [`THIN_EDGES`] of its pixels on its edges, is computed again, [`REFINE`] times finer
+/// (exactly where the parts are tilted against each other): a crescent thinner than a
+/// pixel (part A resting on the rim just off the hole) is sampled by a few pixels along
+/// it, and their centroid strays from the region's by up to a few pixels (`ftmap verify`).
 const THIN: u32 = 200;
 /// Mean width (pixels, [`ContactSummary::mean_width`]) below which a region is thin
 /// however many pixels it has (a crescent along a wide rim).
@@ -495,60 +488,13 @@ const THIN_WIDTH: f64 = 2.0;
 const THIN_EDGES: f64 = 0.25;
 /// How much finer a thin region's pixel is where the faces stay parallel.
 const REFINE: i64 = 4;
-/// How much finer a thin region's pixel is where the parts are tilted against each other:
-/// nearly every contact there is a band narrower than the pixel, and twice finer holds its
-/// centroid within a pixel about as often as four times (`ftmap verify` on
-/// peg_in_hole_4dof: 98.0 against 98.5 % of 200 cells, 89.5 % unrefined) at under half the
-/// cost (42 against 98 s for the map).
-const TILTED_REFINE: i64 = 2;
-/// A thin region of tilted parts with fewer finer pixels than this is computed exactly
-/// instead ([`exact_contact`]): the tip of the lens where part A's rim crosses the edge of
-/// part B's hole, or a sliver of a crescent, whose lowest point lies between pixel centres
-/// and a few pixels from the nearest of them (the map's depth up to 17 um too high there
-/// at a 2 um tolerance, its lever up to 0.5 mm off; `ftmap verify`). Larger regions are
-/// sampled well enough by their pixels, at a small share of the exact region's cost.
-const TIP_PIXELS: u32 = 10;
-/// Contact pixels of tilted parts farther apart than this (pixels, across and along the
-/// rows) belong to separate pieces, and a region in pieces is computed exactly too: caps at
-/// two points where the parts touch at nearly one height (part A's rim across the rim of
-/// B's hole), millimetres apart, each a few finer pixels whose count, not area, weighed the
-/// centroid between them (up to 181 um off); and a band across the pixel lattice whose
-/// pixel centres lie this far apart along it, its centroid among them up to a pixel off
-/// (`ftmap verify` on peg_in_hole_4dof: p99 99 -> 79 um). Both cost 14 % of that map's time.
-const APART: u32 = 3;
-/// Whether the contact pixels of `c` fall into pieces more than [`APART`] pixels apart.
-fn in_pieces(c: &ContactSummary) -> bool {
-    // Bounding boxes [first row, last row, first column, last column] of the pieces so far;
-    // the rows come in order, so a row joins the pieces within reach of it, which merge.
-    let mut pieces: Vec<[u32; 4]> = Vec::new();
-    for &(r, first, last) in &c.rows {
-        let near =
-            |p: &[u32; 4]| r <= p[1] + APART && first <= p[3] + APART && p[2] <= last + APART;
-        let mut joined = [r, r, first, last];
-        pieces.retain(|p| {
-            let keep = !near(p);
-            if !keep {
-                joined = [
-                    joined[0].min(p[0]),
-                    joined[1].max(p[1]),
-                    joined[2].min(p[2]),
-                    joined[3].max(p[3]),
-                ];
-            }
-            keep
-        });
-        pieces.push(joined);
-    }
-    pieces.len() > 1
-}
-
 /// Coarse pixels around a thin region's contact pixels that its finer images cover.
 const REFINE_MARGIN: i64 = 2;
 
 /// The finer images of a rotation cell's thin contact regions: A and B rendered once
-/// [`REFINE`] (or [`TILTED_REFINE`]) times finer over the union of every thin region's
-/// windows by the backend, each region then reduced on the CPU over its own part of them (the
-/// pixels a render of its windows alone gives).
+/// [`REFINE`] times finer over the union of every thin region's windows by the backend,
+/// each region then reduced on the CPU over its own part of them (the pixels a render of
+/// its windows alone gives).
 struct Fine<'a> {
     ctx: &'a Context<'a>,
     /// How much finer than the coarse pixel its pixel is.
@@ -739,30 +685,4 @@ pub fn merge(parts: Vec<(FtMap, [usize; 2])>) -> Result<FtMap> {
         ));
     }
     Ok(map)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn rows(rows: &[(u32, u32, u32)]) -> ContactSummary {
-        ContactSummary {
-            count: rows.iter().map(|r| r.2 - r.1 + 1).sum(),
-            rows: rows.to_vec(),
-            ..ContactSummary::none(0.0)
-        }
-    }
-
-    #[test]
-    fn a_region_is_in_pieces_only_where_its_pixels_lie_more_than_apart() {
-        // A band stepping across the lattice, a row and a column skipped between pixels.
-        let band = [(20, 89, 89), (21, 90, 90), (23, 91, 91), (24, 92, 93)];
-        assert!(!in_pieces(&rows(&band)));
-        // Two caps 21 columns apart, and two 6 rows apart.
-        assert!(in_pieces(&rows(&[(1, 48, 50), (2, 52, 52), (8, 73, 74)])));
-        assert!(in_pieces(&rows(&[(1, 49, 50), (7, 50, 51)])));
-        // Pieces that a later row joins are one.
-        assert!(in_pieces(&rows(&[(1, 1, 2), (2, 9, 10)])));
-        assert!(!in_pieces(&rows(&[(1, 1, 2), (2, 9, 10), (3, 3, 8)])));
-    }
 }

@@ -45,9 +45,9 @@ impl<'a> Planes<'a> {
 
 /// A mesh's triangles as one image sees them.
 struct Facets {
-    /// Per triangle, its corners (image columns, rows) counter-clockwise in that frame;
-    /// `None` where the triangle is edge-on or turned away from the view.
-    corners: Vec<Option<[[f64; 2]; 3]>>,
+    /// Per triangle, its three edges as lines in the image ([`Line`]), each >= 0 on the
+    /// triangle's side; `None` where the triangle is edge-on or turned away from the view.
+    edges: Vec<Option<[Line; 3]>>,
     /// Per triangle, its height plane: h = p[0] + p[1] x + p[2] y (m; x, y in pixels).
     plane: Vec<[f64; 3]>,
     /// The edges on the outline of the surface seen ([`Fan::outline`]), each from its
@@ -60,14 +60,14 @@ impl Facets {
     fn of(job: &RenderJob<'_>) -> Self {
         let fan = Fan::of(job);
         let mut out = Self {
-            corners: Vec::with_capacity(fan.corners.len()),
+            edges: Vec::with_capacity(fan.corners.len()),
             plane: Vec::with_capacity(fan.corners.len()),
             outline: Vec::new(),
         };
         for (t, p) in fan.corners.iter().enumerate() {
             let area = edge_function(p[0], p[1], p[2]);
             if area.abs() < EDGE_ON {
-                out.corners.push(None);
+                out.edges.push(None);
                 out.plane.push([0.0; 3]);
                 continue;
             }
@@ -83,12 +83,14 @@ impl Facets {
             if !facing || hx.hypot(hy) / job.pixel > STEEP {
                 // Turned away (hidden behind the part's near side), or a wall seen edge-on
                 // but for rounding: its edges are the faces' beside it.
-                out.corners.push(None);
+                out.edges.push(None);
                 continue;
             }
             let q = p.map(|q| [q[0], q[1]]);
-            out.corners
-                .push(Some(if area > 0.0 { q } else { [q[0], q[2], q[1]] }));
+            // Counter-clockwise in the image.
+            let c = if area > 0.0 { q } else { [q[0], q[2], q[1]] };
+            out.edges
+                .push(Some([0, 1, 2].map(|e| Line::left_of(c[e], c[(e + 1) % 3]))));
             out.outline
                 .extend((0..3).filter(|&k| fan.outline(t, k)).map(|k| {
                     let (a, b) = (q[(k + 1) % 3], q[(k + 2) % 3]);
@@ -142,7 +144,7 @@ fn parts_at<'b>(
             let (xf, yf) = (x as f64, y as f64);
             let mut k = 0;
             for &t in &tris[..n] {
-                let Some(c) = &facets.corners[t as usize] else {
+                let Some(edges) = &facets.edges[t as usize] else {
                     continue;
                 };
                 let p = facets.plane[t as usize];
@@ -151,8 +153,8 @@ fn parts_at<'b>(
                     tri: t,
                     ..EMPTY_PART
                 };
-                for e in 0..3 {
-                    part.lines[e] = left_of(c[e], c[(e + 1) % 3], xf, yf);
+                for (line, edge) in part.lines.iter_mut().zip(edges) {
+                    *line = edge.about(xf, yf);
                 }
                 part.n = 3;
                 buf[k] = part;
@@ -163,16 +165,24 @@ fn parts_at<'b>(
     }
 }
 
-/// The side left of the line a -> b (image pixels) as an affine function of (dx, dy) about
-/// the pixel centre (x, y), in pixels: >= 0 on the left.
-fn left_of(a: [f64; 2], b: [f64; 2], x: f64, y: f64) -> [f64; 3] {
-    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
-    let len = ex.hypot(ey);
-    [
-        (ex * (y - a[1]) - ey * (x - a[0])) / len,
-        -ey / len,
-        ex / len,
-    ]
+/// A line of the image as an affine function of its columns and rows, in pixels:
+/// `c[0] + c[1] x + c[2] y`, >= 0 on one side.
+#[derive(Debug, Clone, Copy)]
+struct Line([f64; 3]);
+
+impl Line {
+    /// The side left of the line a -> b (image pixels).
+    fn left_of(a: [f64; 2], b: [f64; 2]) -> Self {
+        let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+        let len = ex.hypot(ey);
+        Self([(ey * a[0] - ex * a[1]) / len, -ey / len, ex / len])
+    }
+
+    /// This line as an affine function of (dx, dy) about the pixel centre (x, y).
+    fn about(&self, x: f64, y: f64) -> [f64; 3] {
+        let [c, nx, ny] = self.0;
+        [c + nx * x + ny * y, nx, ny]
+    }
 }
 
 impl Part {
@@ -390,7 +400,7 @@ fn footprint(
             return Some(Footprint::Mixed);
         }
         segments[k] = [a, b];
-        let Some(within) = near.with(left_of(a, b, xf, yf)) else {
+        let Some(within) = near.with(Line::left_of(a, b).about(xf, yf)) else {
             return Some(Footprint::Mixed);
         };
         near = within;
@@ -490,15 +500,28 @@ struct Polygon {
 }
 
 impl Polygon {
-    /// A pixel's square about its centre.
-    fn square() -> Self {
-        let mut p = [[0.0; 2]; MAX_CORNERS];
-        p[..4].copy_from_slice(&[[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]);
-        Self { n: 4, p }
+    /// No corners yet (a buffer to clip into).
+    const EMPTY: Self = Self {
+        n: 0,
+        p: [[0.0; 2]; MAX_CORNERS],
+    };
+
+    /// Makes this a pixel's square about its centre (writing its four corners alone: the
+    /// polygons are buffers reused piece after piece).
+    fn set_square(&mut self) {
+        self.p[..4].copy_from_slice(&[[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]);
+        self.n = 4;
     }
 
-    /// Keeps the part where the affine function `f` (f[0] + f[1] x + f[2] y) is >= 0.
-    fn keep(&mut self, f: [f64; 3]) {
+    /// Makes this the polygon of these corners (at most [`MAX_CORNERS`]).
+    fn set(&mut self, corners: &[[f64; 2]]) {
+        self.p[..corners.len()].copy_from_slice(corners);
+        self.n = corners.len();
+    }
+
+    /// The part where the affine function `f` (f[0] + f[1] x + f[2] y) is >= 0, written to
+    /// `out`; `false` (and `out` left as it was) where that is the whole polygon.
+    fn clip(&self, f: [f64; 3], out: &mut Self) -> bool {
         let at = |q: [f64; 2]| f[0] + f[1] * q[0] + f[2] * q[1];
         let mut v = [0.0; MAX_CORNERS];
         let mut inside = 0;
@@ -508,29 +531,26 @@ impl Polygon {
         }
         // Most lines leave a pixel's square whole or cut nothing of it.
         if inside == self.n {
-            return;
+            return false;
         }
-        if inside == 0 {
-            self.n = 0;
-            return;
-        }
-        let mut out = [[0.0; 2]; MAX_CORNERS];
         let mut m = 0;
-        for k in 0..self.n {
-            let j = (k + 1) % self.n;
-            let (q0, q1, f0, f1) = (self.p[k], self.p[j], v[k], v[j]);
-            if f0 >= 0.0 && m < MAX_CORNERS {
-                out[m] = q0;
-                m += 1;
-            }
-            if (f0 >= 0.0) != (f1 >= 0.0) && m < MAX_CORNERS {
-                let t = f0 / (f0 - f1);
-                out[m] = [q0[0] + t * (q1[0] - q0[0]), q0[1] + t * (q1[1] - q0[1])];
-                m += 1;
+        if inside > 0 {
+            for k in 0..self.n {
+                let j = (k + 1) % self.n;
+                let (q0, q1, f0, f1) = (self.p[k], self.p[j], v[k], v[j]);
+                if f0 >= 0.0 && m < MAX_CORNERS {
+                    out.p[m] = q0;
+                    m += 1;
+                }
+                if (f0 >= 0.0) != (f1 >= 0.0) && m < MAX_CORNERS {
+                    let t = f0 / (f0 - f1);
+                    out.p[m] = [q0[0] + t * (q1[0] - q0[0]), q0[1] + t * (q1[1] - q0[1])];
+                    m += 1;
+                }
             }
         }
-        self.p = out;
-        self.n = m;
+        out.n = m;
+        true
     }
 
     fn corners(&self) -> &[[f64; 2]] {
@@ -565,33 +585,36 @@ pub(crate) struct Overlay<'a> {
     pub b_normals: &'a [[f32; 3]],
 }
 
-/// One piece of a pixel's square where A lies over B: its polygon about the pixel's centre,
-/// the gap over it and A's height (affine about the centre), and B's triangle.
+/// One piece of a pixel's square where A lies over B: the gap over it and A's height
+/// (affine about the pixel's centre), B's triangle, and where its polygon's corners lie in
+/// [`Kept::corners`].
 struct Piece {
-    polygon: Polygon,
     gap: [f64; 3],
     height: [f64; 3],
     b_tri: u32,
+    corners: std::ops::Range<usize>,
 }
 
 impl Overlay<'_> {
-    /// Calls `f` with each piece of A's image pixel (x, y) over B's pixel (x, y) + `off`
-    /// whose least gap may be at most `below` (m): pairs of planes whose gap over the whole
-    /// square stays above it are passed over.
+    /// Keeps each piece of A's image pixel (x, y) over B's pixel (x, y) + `off` whose least
+    /// gap may be at most `below` (m) in `kept` (pairs of planes whose gap over the whole
+    /// square stays above it are passed over); returns the least gap over them (+inf where
+    /// there are none).
     fn pieces(
         &self,
         [x, y]: [i64; 2],
         off: [i64; 2],
         below: f64,
         [buf_a, buf_b]: &mut [[Part; 9]; 2],
-        mut f: impl FnMut(&Piece),
-    ) {
+        kept: &mut Kept,
+    ) -> f64 {
         let (bx, by) = (x + off[0], y + off[1]);
+        let mut least = f64::INFINITY;
         let Some(pa) = parts_at(self.a, x, y, buf_a) else {
-            return;
+            return least;
         };
         let Some(pb) = parts_at(self.b, bx, by, buf_b) else {
-            return;
+            return least;
         };
         for a in pa {
             for b in pb {
@@ -603,7 +626,8 @@ impl Overlay<'_> {
                 if gap[0] - 0.5 * (gap[1].abs() + gap[2].abs()) > below {
                     continue;
                 }
-                let mut polygon = Polygon::square();
+                let [mut polygon, mut spare] = kept.polygons.each_mut();
+                polygon.set_square();
                 for l in a.lines[..usize::from(a.n)]
                     .iter()
                     .chain(&b.lines[..usize::from(b.n)])
@@ -611,30 +635,46 @@ impl Overlay<'_> {
                     if polygon.n < 3 {
                         break;
                     }
-                    polygon.keep(*l);
+                    if polygon.clip(*l, spare) {
+                        std::mem::swap(&mut polygon, &mut spare);
+                    }
                 }
                 if polygon.n >= 3 {
-                    f(&Piece {
-                        polygon,
+                    for q in polygon.corners() {
+                        least = least.min(gap[0] + gap[1] * q[0] + gap[2] * q[1]);
+                    }
+                    let start = kept.corners.len();
+                    kept.corners.extend_from_slice(polygon.corners());
+                    kept.pieces.push(Piece {
                         gap,
                         height: a.plane,
                         b_tri: b.tri,
+                        corners: start..kept.corners.len(),
                     });
                 }
             }
         }
-    }
-
-    /// The least gap over A's image pixel (x, y) (+inf where the parts do not overlap
-    /// there).
-    fn least_gap(&self, at: [i64; 2], off: [i64; 2], below: f64, bufs: &mut [[Part; 9]; 2]) -> f64 {
-        let mut least = f64::INFINITY;
-        self.pieces(at, off, below, bufs, |p| {
-            for q in p.polygon.corners() {
-                least = least.min(p.gap[0] + p.gap[1] * q[0] + p.gap[2] * q[1]);
-            }
-        });
         least
+    }
+}
+
+/// The pieces of the pixels a flood reached whose least gap may be within the tolerance,
+/// and the polygons they are clipped in.
+struct Kept {
+    pieces: Vec<Piece>,
+    /// Their polygons' corners.
+    corners: Vec<[f64; 2]>,
+    /// Buffers to clip a piece's polygon in.
+    polygons: [Polygon; 2],
+}
+
+impl Default for Kept {
+    fn default() -> Self {
+        Self {
+            pieces: Vec::new(),
+            corners: Vec::new(),
+            polygons: [Polygon::EMPTY; 2],
+        }
     }
 }
 
@@ -645,8 +685,14 @@ pub(crate) struct Flood {
     seen: Vec<u32>,
     /// This call's mark in `seen`.
     call: u32,
-    /// The pixels reached, with the least gap over their square (m).
-    reached: Vec<(u32, u32, f64)>,
+    /// The pixels reached (row, column), with the least gap over their square (m) and
+    /// where their pieces lie in `pieces`.
+    reached: Vec<(u32, u32, f64, std::ops::Range<usize>)>,
+    /// The pieces of the pixels reached.
+    kept: Kept,
+    /// The reached pixels within the tolerance, as their index in the image above their
+    /// index in `reached`, in order.
+    order: Vec<u64>,
     /// Pixels still to look at.
     stack: Vec<(u32, u32)>,
 }
@@ -676,6 +722,8 @@ pub(crate) fn exact_contact(
     }
     let call = scratch.call;
     scratch.reached.clear();
+    scratch.kept.pieces.clear();
+    scratch.kept.corners.clear();
     scratch.stack.clear();
     for &(r, first, last) in &seed.rows {
         for c in first..=last {
@@ -686,8 +734,14 @@ pub(crate) fn exact_contact(
     let mut least = f64::from(seed.gap);
     let mut bufs = [[EMPTY_PART; 9]; 2];
     while let Some((r, c)) = scratch.stack.pop() {
-        let g = o.least_gap([i64::from(c), i64::from(r)], off, least + tol, &mut bufs);
-        scratch.reached.push((r, c, g));
+        // The least gap over the pixel, and its pieces kept for the region below: the
+        // threshold only falls as the least gap does, so they are all it will need.
+        let start = scratch.kept.pieces.len();
+        let at = [i64::from(c), i64::from(r)];
+        let g = o.pieces(at, off, least + tol, &mut bufs, &mut scratch.kept);
+        scratch
+            .reached
+            .push((r, c, g, start..scratch.kept.pieces.len()));
         least = least.min(g);
         if g > least + tol {
             continue;
@@ -719,18 +773,25 @@ pub(crate) fn exact_contact(
     let thr = least + tol;
     let mut out = ContactSummary::none(least as f32);
     let mut area = 0.0;
-    scratch.reached.sort_unstable_by_key(|&(r, c, _)| (r, c));
-    for &(r, c, g) in &scratch.reached {
-        if g > thr {
-            continue;
-        }
+    scratch.order.clear();
+    scratch.order.extend(
+        (scratch.reached.iter().enumerate())
+            .filter(|(_, (_, _, g, _))| *g <= thr)
+            .map(|(k, (r, c, _, _))| ((u64::from(*r) * w as u64 + u64::from(*c)) << 32) | k as u64),
+    );
+    scratch.order.sort_unstable();
+    for &key in &scratch.order {
+        let (r, c, _, pieces) = &scratch.reached[(key & u64::from(u32::MAX)) as usize];
+        let (r, c) = (*r, *c);
         let mut share = 0.0;
-        o.pieces([i64::from(c), i64::from(r)], off, thr, &mut bufs, |p| {
-            let mut within = p.polygon;
-            within.keep([thr - p.gap[0], -p.gap[1], -p.gap[2]]);
-            let (a, [dx, dy]) = within.moments();
+        let kept = &mut scratch.kept;
+        for p in &kept.pieces[pieces.clone()] {
+            let [piece, within] = &mut kept.polygons;
+            piece.set(&kept.corners[p.corners.clone()]);
+            let cut = piece.clip([thr - p.gap[0], -p.gap[1], -p.gap[2]], within);
+            let (a, [dx, dy]) = if cut { within } else { piece }.moments();
             if a <= 0.0 {
-                return;
+                continue;
             }
             share += a;
             out.sum_col += a * (f64::from(c) + dx);
@@ -744,7 +805,7 @@ pub(crate) fn exact_contact(
             for (acc, n) in out.sum_normal.iter_mut().zip(n) {
                 *acc += a * f64::from(n);
             }
-        });
+        }
         if share <= 0.0 {
             continue;
         }
