@@ -661,6 +661,7 @@ impl Overlay<'_> {
 /// The pieces of the pixels a flood reached whose least gap may be within the tolerance,
 /// and the polygons they are clipped in.
 struct Kept {
+    /// The pieces, pixel after pixel.
     pieces: Vec<Piece>,
     /// Their polygons' corners.
     corners: Vec<[f64; 2]>,
@@ -686,7 +687,7 @@ pub(crate) struct Flood {
     /// This call's mark in `seen`.
     call: u32,
     /// The pixels reached (row, column), with the least gap over their square (m) and
-    /// where their pieces lie in `pieces`.
+    /// where their pieces lie in `kept`.
     reached: Vec<(u32, u32, f64, std::ops::Range<usize>)>,
     /// The pieces of the pixels reached.
     kept: Kept,
