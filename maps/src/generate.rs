@@ -125,8 +125,8 @@ pub fn generate(
 /// pixel centres within a thousandth of a pixel of a slanted edge covered; 11: pixels on
 /// the parts' outlines counted by the share of them covered; 12: the tips of tilted parts'
 /// contacts computed exactly; 13: and their regions in pieces; 14: every thin region of
-/// tilted parts computed exactly).
-const MAP_REVISION: u32 = 14;
+/// tilted parts computed exactly; 15: and grown from where the two parts' rims cross too).
+const MAP_REVISION: u32 = 15;
 
 /// The FT-Map of `task` (CPU backend, default options) from the cache folder `dir`, where
 /// it is kept under the hash of the task file, its meshes, this crate's version and

@@ -7,7 +7,10 @@
 //! the region taken where the map's own contact height puts it.
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
-use parry3d_f64::query::{self, ClosestPoints, Ray, RayCast};
+use parry3d_f64::query::{
+    self, ClosestPoints, ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher, Ray,
+    RayCast,
+};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{RngCore, SeedableRng};
 use rayon::prelude::*;
@@ -49,6 +52,10 @@ const LATTICE_TURN: f64 = 0.553_574_358_897_045_3;
 const SEARCHES: usize = 4;
 /// Clearance between the parts before the sweep, and past each mesh's bounds for rays (m).
 const MARGIN: f64 = 1e-3;
+/// Lattice steps within which a first ray in contact stands for a place where the exact
+/// geometry puts the parts within the first scan's slack: farther, the first rays passed
+/// it by.
+const PASSED: f64 = 2.0;
 
 /// How a verification samples the map.
 #[derive(Debug, Clone, Copy)]
@@ -387,11 +394,13 @@ impl<'a> Parts<'a> {
     /// of touching, first at about the pixel over all of A; where their centroid
     /// is not fine enough (few rays, or many on the region's edge: a crescent, a strip a
     /// few rays wide), again finer over the region itself, grown ray by ray from them, from
-    /// every first ray within a slack of touching and from the closest points ([`Seeds`];
-    /// `slope`, the tangent of B's tilt against A): a thin crescent's centroid moves with
-    /// its sampling, its tips may be thinner than the first rays' pitch, and a face tilted
-    /// against another may rest on its rim at two places micrometres apart in height,
-    /// slivers narrower than the pitch that the first rays may touch at one place or none.
+    /// every first ray within a slack of touching, from the closest points and from every
+    /// place where parry's contact manifolds put the parts within that slack with no
+    /// touching first ray near ([`Seeds`]; `slope`, the tangent of B's tilt against A): a
+    /// thin crescent's centroid moves with its sampling, its tips may be thinner than the
+    /// first rays' pitch, and a face tilted against another may rest on its rim at two
+    /// places micrometres apart in height, slivers narrower than the pitch that the first
+    /// rays may touch at one place or none.
     fn region(
         &self,
         view: &View,
@@ -420,13 +429,32 @@ impl<'a> Parts<'a> {
         let lattice = Lattice::new(pitch, &mut phase);
         // A pitch of the tilt's slope more than the tolerance widens a sliver to about a
         // pitch: every place where the parts rest has a first ray within it.
-        let near = rays.scan(&lattice, tolerance + pitch * slope);
+        let slack = tolerance + pitch * slope;
+        let near = rays.scan(&lattice, slack);
         let touching: BTreeMap<[i64; 2], f64> = (near.iter())
             .filter(|(_, (_, gap))| *gap <= tolerance)
             .map(|(&k, &(h, _))| (k, h))
             .collect();
+        // Where the parts come within the slack with no touching first ray near, the first
+        // rays may have passed a piece of the region by (a lens tip far from the rest).
+        let reach = PASSED * pitch;
+        let passed: Vec<[f64; 2]> = (rays.manifold_points(slack).into_iter())
+            .filter(|&p| {
+                let [i, j] = lattice.nearest(p);
+                let r = PASSED as i64;
+                !(i - r..=i + r)
+                    .flat_map(|i| (j - r..=j + r).map(move |j| [i, j]))
+                    .any(|k| {
+                        let [u, v] = lattice.at(k);
+                        touching.contains_key(&k) && (u - p[0]).hypot(v - p[1]) <= reach
+                    })
+            })
+            .collect();
         let coarse = (!touching.is_empty()).then(|| Scan::of(&touching, &lattice));
-        let error = coarse.as_ref().map_or(pitch, Scan::sampling_error);
+        let error = match &coarse {
+            Some(c) if passed.is_empty() => c.sampling_error(),
+            _ => pitch,
+        };
         if let Some(c) = coarse
             .as_ref()
             .filter(|_| error < SAMPLING_SHARE * self.task.depth.pixel)
@@ -442,6 +470,7 @@ impl<'a> Parts<'a> {
             near: (near.iter())
                 .filter(|(_, (_, gap))| *gap > tolerance)
                 .map(|(&k, _)| lattice.at(k))
+                .chain(passed)
                 .collect(),
             radius: pitch,
         };
@@ -672,6 +701,40 @@ impl Rays<'_> {
             }
             _ => None,
         }
+    }
+
+    /// Where parry's contact manifolds between the two meshes put them within `slack`
+    /// (m) of each other, with B's surface below A's within the slack along the approach:
+    /// each such point of A as (u, v).
+    fn manifold_points(&self, slack: f64) -> Vec<[f64; 2]> {
+        let pair = &self.parts.pair;
+        let w = self.view.w;
+        let a_pose = Isometry3::from(Translation3::from(w * self.rise));
+        let mut manifolds: Vec<ContactManifold<(), ()>> = Vec::new();
+        let found = DefaultQueryDispatcher.contact_manifolds(
+            &a_pose.inv_mul(self.b_pose),
+            &pair.a,
+            &pair.b,
+            slack,
+            &mut manifolds,
+            &mut None,
+        );
+        if found.is_err() {
+            return Vec::new();
+        }
+        let mut out = Vec::new();
+        for m in &manifolds {
+            let sub = m.subshape_pos1.unwrap_or_else(Isometry3::identity);
+            for c in m.points.iter().filter(|c| c.dist <= slack) {
+                let p = a_pose * (sub * c.local_p1);
+                let down = Ray::new(p + w * slack, -w);
+                if pair.b.intersects_ray(self.b_pose, &down, 2.0 * slack) {
+                    let [u, v, _] = self.view.project(&p);
+                    out.push([u, v]);
+                }
+            }
+        }
+        out
     }
 
     /// The contact region grown from `seeds` (found on a lattice of `pitch`, their

@@ -23,11 +23,16 @@ const STEEP: f64 = 1e5;
 const LINE_SLACK: f64 = 2e-3;
 
 /// One image with what [`exact_contact`] reads of it beside its pixels: its mesh's
-/// triangles as planes and each pixel's footprint.
+/// triangles as planes, each pixel's footprint, and the pixels on its rim.
 pub(crate) struct Planes<'a> {
     img: &'a DepthImage,
     facets: Facets,
     prints: Footprints,
+    /// The pixels (row, column) whose footprint is not one plain face: on an outline or a
+    /// crease.
+    rim: Vec<(u32, u32)>,
+    /// Per pixel, whether it is in `rim`.
+    on_rim: Vec<bool>,
 }
 
 impl<'a> Planes<'a> {
@@ -35,11 +40,27 @@ impl<'a> Planes<'a> {
     pub(crate) fn of(job: &RenderJob<'_>, img: &'a DepthImage) -> Self {
         let facets = Facets::of(job);
         let prints = Footprints::of(img, &facets);
+        let on_rim: Vec<bool> = (prints.cells.iter())
+            .map(|f| f.as_ref().is_some_and(|f| !f.plain()))
+            .collect();
+        let width = prints.width;
+        let rim = (on_rim.iter().enumerate())
+            .filter(|(_, on)| **on)
+            .map(|(k, _)| ((k / width) as u32, (k % width) as u32))
+            .collect();
         Self {
             img,
             facets,
             prints,
+            rim,
+            on_rim,
         }
+    }
+
+    /// Whether pixel (x, y) is on the rim (false outside the image).
+    fn on_rim(&self, x: i64, y: i64) -> bool {
+        let (w, h) = (self.prints.width as i64, self.prints.height as i64);
+        (0..w).contains(&x) && (0..h).contains(&y) && self.on_rim[(y * w + x) as usize]
     }
 }
 
@@ -209,6 +230,13 @@ enum Footprint {
     Parts { parts: [Part; 2], n: u8 },
     /// Anything else: each triangle seen about the pixel is a part ([`parts_at`]).
     Mixed,
+}
+
+impl Footprint {
+    /// Whether this is one face over the whole square, with no outline or crease in it.
+    fn plain(&self) -> bool {
+        matches!(self, Footprint::Parts { parts, n: 1 } if parts[0].n == 0)
+    }
 }
 
 /// One image's [`Footprint`] at each of its pixels; `None` where it sees no surface.
@@ -700,7 +728,9 @@ pub(crate) struct Flood {
 
 /// The contact of B at `shift` under A in `o`, computed exactly within each pixel: grown
 /// from the pixels of `seed` (the contact found at the pixel centres, whose least gap the
-/// exact one is at most) to every pixel of A's image joined to them by pixels whose least
+/// exact one is at most) and from every pixel where A's rim lies over B's (where two rims
+/// cross, the parts may touch at a cap thinner than a pixel that no pixel centre sees) to
+/// every pixel of A's image joined to them by pixels whose least
 /// gap is within `tolerance` (m) of the least; `None` where it finds no overlap. Its pixels
 /// are those with a share of the region, and the region's area is their count less
 /// [`ContactSummary::deficit`].
@@ -729,6 +759,14 @@ pub(crate) fn exact_contact(
     for &(r, first, last) in &seed.rows {
         for c in first..=last {
             scratch.seen[r as usize * w + c as usize] = call;
+            scratch.stack.push((r, c));
+        }
+    }
+    for &(r, c) in &o.a.rim {
+        let k = r as usize * w + c as usize;
+        let over = o.b.on_rim(i64::from(c) + off[0], i64::from(r) + off[1]);
+        if over && scratch.seen[k] != call {
+            scratch.seen[k] = call;
             scratch.stack.push((r, c));
         }
     }
