@@ -214,9 +214,22 @@ pub fn verify(
 pub fn verify_cells(
     map: &FtMap,
     task: &Task,
+    meshes: [&Mesh; 2],
+    cells: &[usize],
+    seed: u64,
+) -> Result<Verification> {
+    verify_cells_with(map, task, meshes, cells, seed, &|_| {})
+}
+
+/// Checks the cells `cells` of `map` as [`verify_cells`] does; `progress` is called with
+/// the number of cells checked since its last call.
+pub fn verify_cells_with(
+    map: &FtMap,
+    task: &Task,
     [mesh_a, mesh_b]: [&Mesh; 2],
     cells: &[usize],
     seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Verification> {
     let meta = map.meta();
     if !meta.model.is_computed() {
@@ -240,7 +253,11 @@ pub fn verify_cells(
     let parts = Parts::new(task, mesh_a, mesh_b, meta.model == WrenchModel::Centroid)?;
     let checks = cells
         .par_iter()
-        .map(|&cell| parts.check(map, cell, seed))
+        .map(|&cell| {
+            let check = parts.check(map, cell, seed);
+            progress(1);
+            check
+        })
         .collect::<Result<Vec<_>>>()?;
     Ok(Verification {
         checks,
@@ -249,8 +266,9 @@ pub fn verify_cells(
     })
 }
 
-/// `opts.samples` distinct cells of `n` (all of them when there are fewer), ascending.
-fn sample(n: usize, opts: VerifyOptions) -> Vec<usize> {
+/// `opts.samples` distinct cells of `n` (all of them when there are fewer), ascending: the
+/// cells [`verify`] checks.
+pub fn sample(n: usize, opts: VerifyOptions) -> Vec<usize> {
     if opts.samples >= n {
         return (0..n).collect();
     }

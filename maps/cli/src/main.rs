@@ -345,6 +345,15 @@ fn load_part(part: &ftmap::task::Part) -> Result<ftmap::mesh::Mesh> {
     Ok(mesh)
 }
 
+/// A progress bar on stderr (drawn only on a terminal) over `total` `units`.
+fn progress_bar(total: u64, units: &str) -> Result<ProgressBar> {
+    let template = format!(
+        "{{spinner}} {{msg}} [{{bar:40}}] {{human_pos}}/{{human_len}} {units}, {{per_sec}}, eta {{eta}}"
+    );
+    let style = ProgressStyle::with_template(&template).context("progress template")?;
+    Ok(ProgressBar::new(total).with_style(style.progress_chars("=> ")))
+}
+
 fn cmd_verify(
     file: &Path,
     task: Option<&str>,
@@ -369,12 +378,17 @@ fn cmd_verify(
         );
     }
     let meshes = [&mesh_a, &mesh_b];
-    let v = if cells.is_empty() {
-        let opts = ftmap::verify::VerifyOptions { samples, seed };
-        ftmap::verify::verify(&map, &task, meshes, opts)?
-    } else {
-        ftmap::verify::verify_cells(&map, &task, meshes, cells, seed)?
+    let checked = match cells.is_empty() {
+        true => ftmap::verify::sample(
+            map.grid().cells(),
+            ftmap::verify::VerifyOptions { samples, seed },
+        ),
+        false => cells.to_vec(),
     };
+    let bar = progress_bar(checked.len() as u64, "cells")?;
+    bar.set_message("verify");
+    let v = ftmap::verify::verify_cells_with(&map, &task, meshes, &checked, seed, &|n| bar.inc(n))?;
+    bar.finish_and_clear();
     let qs = [0.5, 0.99, 0.999, 1.0];
     let um = |xs: Vec<f64>| {
         xs.iter()
@@ -546,13 +560,7 @@ fn cmd_generate(
     let (mesh_a, mesh_b) = (load_part(&task.part_a)?, load_part(&task.part_b)?);
     let compute = |t: &Task, out: &Path| -> Result<()> {
         let total = shard_configs(&t.grid()?, opts.shard);
-        let bar = ProgressBar::new(total as u64).with_style(
-            ProgressStyle::with_template(
-                "{spinner} {msg} [{bar:40}] {human_pos}/{human_len} configs, {per_sec}, eta {eta}",
-            )
-            .context("progress template")?
-            .progress_chars("=> "),
-        );
+        let bar = progress_bar(total as u64, "configs")?;
         bar.set_message(format!("{} ({})", t.name, backend.name()));
         let start = Instant::now();
         let map = generate_with(t, &mesh_a, &mesh_b, backend.as_ref(), opts, &|n| bar.inc(n))?;
