@@ -863,6 +863,48 @@ fn polygon(r: f64, n: usize, phase: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// Most spheres a bed may have: MuJoCo tests each against part B's pieces every step.
+const MAX_BED: usize = 10_000;
+
+/// The pitch of `face`'s bed: the task's `[scene] bed_pitch` where it sets one (checked:
+/// its bands must fit in half of it, and the bed must stay within [`MAX_BED`] spheres),
+/// else the face's own.
+fn bed_pitch(task: &Task, face: &Face) -> Result<f64> {
+    let Some(pitch) = task.scene.bed_pitch else {
+        return Ok(face.pitch);
+    };
+    let invalid = |reason: String| HarnessError::Invalid {
+        what: "[scene] bed_pitch",
+        reason: format!("{}: {reason}", task.path.display()),
+    };
+    if pitch <= 2.0 * FIRST_BAND {
+        return Err(invalid(format!(
+            "{:.4} mm: the bed's outermost band, {:.3} mm wide, must fit in half the pitch: it must exceed {:.3} mm",
+            pitch * 1e3,
+            FIRST_BAND * 1e3,
+            2.0 * FIRST_BAND * 1e3
+        )));
+    }
+    let coarser = Face {
+        pitch,
+        ..face.clone()
+    };
+    // The lattice over the reach's disc alone, before the bed is built sphere by sphere.
+    let lattice = PI * face.reach * face.reach / coarser.cell_area();
+    let spheres = if lattice > 10.0 * MAX_BED as f64 {
+        lattice as usize
+    } else {
+        coarser.bed().len()
+    };
+    if spheres > MAX_BED {
+        return Err(invalid(format!(
+            "{:.4} mm gives part A's bed about {spheres} spheres (at most {MAX_BED}, each tested against part B every step): choose a coarser pitch",
+            pitch * 1e3
+        )));
+    }
+    Ok(pitch)
+}
+
 /// [`Face::solid`], its error named.
 fn solid_of(face: &Face) -> Result<Vec<Piece>> {
     face.solid().map_err(|reason| HarnessError::Invalid {
@@ -983,7 +1025,7 @@ impl SceneSpec {
             name: "vision".into(),
             camera: Camera::from(setup),
         });
-        let (face, pieces, top) = match geometry {
+        let (mut face, pieces, top) = match geometry {
             Geometry::RoundPeg {
                 peg_radius,
                 hole_radius,
@@ -1098,6 +1140,7 @@ impl SceneSpec {
                 (face, pieces, seat_height)
             }
         };
+        face.pitch = bed_pitch(task, &face)?;
         Ok(Self {
             task: task.name.clone(),
             visual: [Role::A, Role::B].map(|r| Visual::File {
@@ -1124,6 +1167,7 @@ impl SceneSpec {
     fn of_meshes(task: &Task) -> Result<Self> {
         let mut parts = crate::decompose::mesh_scene(task)?;
         parts.face.turned = wrist(task)[2];
+        parts.face.pitch = bed_pitch(task, &parts.face)?;
         let dir = task.path.parent().unwrap_or(Path::new("."));
         Ok(Self {
             task: task.name.clone(),
@@ -1815,5 +1859,33 @@ mod tests {
             turned < 0.8 * plain && turned < 160e-6,
             "centroid {turned:e} m RMS off with the rings half a pitch apart, {plain:e} a pitch"
         );
+    }
+
+    #[test]
+    fn a_task_s_bed_pitch_sets_the_bed_and_one_too_fine_is_refused() {
+        let peg = Task::find("peg_in_hole").expect("task");
+        let default = SceneSpec::of_task(&peg).expect("scene");
+        let dir = std::env::temp_dir().join(format!("ftfusion-bed-pitch-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let text = std::fs::read_to_string(&peg.path).expect("task text");
+        let with = |pitch: &str| -> Result<SceneSpec> {
+            let path = dir.join("task.toml");
+            std::fs::write(&path, format!("{text}\n[scene]\nbed_pitch = {pitch}\n"))
+                .expect("write");
+            SceneSpec::of_task(&Task::load(&path).expect("task"))
+        };
+        let coarse = with("0.001").expect("a 1 mm bed");
+        assert_eq!((default.face.pitch, coarse.face.pitch), (0.0005, 0.001));
+        // The same face and part B; the bed's spheres cover the face's area either way.
+        assert_eq!((&coarse.pieces, coarse.top), (&default.pieces, default.top));
+        let area = |s: &SceneSpec| s.face.bed().iter().map(|s| s.area).sum::<f64>();
+        let (n0, n1) = (default.face.bed().len(), coarse.face.bed().len());
+        assert!(n1 < n0 / 2, "{n1} spheres at 1 mm, {n0} at 0.5 mm");
+        assert!((area(&coarse) / area(&default) - 1.0).abs() < 1e-3);
+        for (pitch, needle) in [("0.00001", "must exceed"), ("0.00005", "spheres")] {
+            let e = with(pitch).expect_err(pitch).to_string();
+            assert!(e.contains("bed_pitch") && e.contains(needle), "{e}");
+        }
+        std::fs::remove_dir_all(dir).ok();
     }
 }

@@ -303,6 +303,11 @@ fn text(d: &Draft) -> String {
         d.tolerance,
         mm(d.tolerance)
     );
+    let _ = writeln!(t);
+    let _ = writeln!(
+        t,
+        "# [scene]\n# bed_pitch = 0.001 # m: a coarser sphere bed under part A in the harness's scene steps faster and presses less evenly; `harness bench` prints both"
+    );
     t
 }
 

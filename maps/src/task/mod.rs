@@ -225,6 +225,26 @@ impl CameraSetup {
     }
 }
 
+/// A task's `[scene]` table: how the harness's MuJoCo work cell discretises the parts'
+/// contact (the scene's own defaults where absent).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSettings {
+    /// Lattice pitch of part A's sphere bed (m): a coarser bed has fewer spheres to collide
+    /// each step, and presses its face less evenly by area.
+    pub bed_pitch: Option<f64>,
+}
+
+impl SceneSettings {
+    /// Checks that the table's values are usable; the reason if not.
+    fn check(&self) -> std::result::Result<(), String> {
+        match self.bed_pitch {
+            Some(p) if !(p > 0.0 && p.is_finite()) => Err(format!("bed_pitch {p} must be > 0")),
+            _ => Ok(()),
+        }
+    }
+}
+
 /// A task file as written.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -239,6 +259,7 @@ struct TaskFile {
     depth: DepthSettings,
     geometry: Option<toml::Value>,
     camera: Option<toml::Value>,
+    scene: Option<toml::Value>,
 }
 
 /// A loaded task with resolved paths.
@@ -264,6 +285,8 @@ pub struct Task {
     pub geometry: Option<Geometry>,
     /// The calibrated camera of a vision task (`[camera]`).
     pub camera: Option<CameraSetup>,
+    /// How the harness's scene discretises the contact (`[scene]`).
+    pub scene: SceneSettings,
 }
 
 /// The folder holding one sub-folder per task: `$FTFUSION_MODELS`, else the nearest
@@ -340,6 +363,7 @@ impl Task {
         }
         let geometry = table("geometry", file.geometry, Geometry::check).map_err(err)?;
         let camera = table("camera", file.camera, CameraSetup::check).map_err(err)?;
+        let scene = table("scene", file.scene, SceneSettings::check).map_err(err)?;
         let dir = path.parent().unwrap_or(Path::new("."));
         let mut contact = file.contact;
         let a = contact.approach;
@@ -386,6 +410,7 @@ impl Task {
             depth: file.depth,
             geometry,
             camera,
+            scene: scene.unwrap_or_default(),
         };
         task.grid().map_err(|e| match e {
             // Already names this task file.
@@ -549,6 +574,7 @@ mod tests {
         assert_eq!((cam.distance, cam.size), (0.2, [640, 480]));
         let peg = Task::find("peg_in_hole").expect("task");
         assert!(peg.camera.is_none() && peg.geometry.is_some());
+        assert_eq!(peg.scene, SceneSettings::default());
         assert!(
             Task::find("peg_in_hole_4dof")
                 .expect("task")
@@ -647,8 +673,18 @@ mod tests {
             ),
             (
                 format!("{peg}\n[scene]\nfloor = 1\n"),
-                "scene",
+                "[scene]",
                 "unknown field",
+            ),
+            (
+                format!("{peg}\n[scene]\nbed_pitch = 0.0\n"),
+                "[scene]",
+                "bed_pitch",
+            ),
+            (
+                format!("{peg}\n[scene]\nbed_pitch = nan\n"),
+                "[scene]",
+                "bed_pitch",
             ),
             (
                 peg.replace("size_trans = 0.005", "size_trans = 0.005\nreach = 0.5"),
