@@ -51,7 +51,10 @@ pub enum HarnessError {
         source: Box<HarnessError>,
     },
     /// Committed scene files differ from what their tasks generate.
-    #[error("scenes not current (run `harness scene`): {}", joined(paths))]
+    #[error(
+        "scenes not what their task.toml generates (write each again: `harness scene --task <its task>`): {}",
+        joined(paths)
+    )]
     ScenesStale {
         /// The stale scene files.
         paths: Vec<PathBuf>,

@@ -192,16 +192,24 @@ impl Sim {
         })
     }
 
-    /// Loads a task's scene: the committed one; a task without `[geometry]`, whose scene
-    /// comes from its meshes and is not committed, gets it written first where it has none.
+    /// Loads a task's scene: the committed one, which must be what its `task.toml`
+    /// generates (a `[scene]` edited since `harness scene` wrote it is not run); a task
+    /// without `[geometry]`, whose scene comes from its meshes and is not committed, gets it
+    /// written first where it has none or another.
     ///
     /// # Errors
-    /// As [`Sim::load`], and when the scene cannot be made or written.
+    /// As [`Sim::load`]; [`HarnessError::ScenesStale`] for a committed scene its task no
+    /// longer generates; when the scene cannot be made or written.
     pub fn of_task(task: &Task) -> Result<Self> {
         let spec = SceneSpec::of_task(task)?;
         let path = scene_path(task);
-        if task.geometry().is_err() && !path.is_file() {
-            write_scene_of(task, &spec)?;
+        let current = std::fs::read_to_string(&path).is_ok_and(|have| have == spec.mjcf());
+        if !current {
+            if task.geometry().is_err() {
+                write_scene_of(task, &spec)?;
+            } else if path.is_file() {
+                return Err(HarnessError::ScenesStale { paths: vec![path] });
+            }
         }
         Self::load(&path, spec)
     }

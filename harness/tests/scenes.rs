@@ -1,5 +1,6 @@
 //! Every generated scene loads in MuJoCo 3.17.0 and in Debian's MuJoCo 2.2.2, and a part A
-//! resting off-centre on part B gives a torque along z x offset in both.
+//! resting off-centre on part B gives a torque along z x offset in both; a scene its task
+//! no longer generates is not run.
 
 mod common;
 #[path = "../../tests/prerequisite.rs"]
@@ -206,4 +207,40 @@ fn every_scene_loads_in_mujoco_2_2_2_with_the_same_torque_sign() {
         );
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_scene_its_task_no_longer_generates_is_refused_until_written_again() {
+    // A copy of peg_in_hole with its committed scene, then a coarser bed in its task file.
+    let committed = Task::find("peg_in_hole").expect("task");
+    let dir = std::env::temp_dir().join(format!("ftfusion-stale-scene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    let from = committed.path.parent().expect("task folder");
+    for file in ["task.toml", "scene.xml", "peg.stl", "block.stl"] {
+        std::fs::copy(from.join(file), dir.join(file)).expect("copy");
+    }
+    let path = dir.join("task.toml");
+    let spheres = || {
+        (std::fs::read_to_string(dir.join("scene.xml")).expect("scene"))
+            .matches("type=\"sphere\"")
+            .count()
+    };
+    let task = Task::load(&path).expect("the copy");
+    Sim::of_task(&task).expect("the committed scene is current");
+    let committed_spheres = spheres();
+    let text = std::fs::read_to_string(&path).expect("task text");
+    std::fs::write(&path, format!("{text}\n[scene]\nbed_pitch = 0.001\n")).expect("write");
+    let task = Task::load(&path).expect("the coarser copy");
+    let e = Sim::of_task(&task)
+        .err()
+        .expect("a stale scene is refused")
+        .to_string();
+    assert!(
+        e.contains("harness scene --task") && e.contains("scene.xml"),
+        "{e}"
+    );
+    harness::sim::regenerate_scene(&task).expect("written again");
+    Sim::of_task(&task).expect("the scene written again");
+    assert!(spheres() < committed_spheres / 2, "{} spheres", spheres());
+    std::fs::remove_dir_all(dir).ok();
 }
