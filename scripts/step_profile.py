@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Where a MuJoCo step of a task's scene spends its time: part A pressed on part B's top
-with the task's force, off the hole by --offset, as a `harness` contact motion starts
+with --force (the tasks' 50 N), part B --offset mm off along x, as a `harness` contact motion starts
 (carriage held in x, y, the press motor on z, the feed at rest). Prints per variant the
 wall time per step, the real-time factor of the stepping alone, the contacts per step,
 the shares of MuJoCo's collision narrow phase and constraint solver (its own timers), and
@@ -50,7 +50,8 @@ def press(m, offset, force, steps):
     press_id = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "press")
     joint = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "z")
     z, vz = m.jnt_qposadr[joint], m.jnt_dofadr[joint]
-    d.mocap_pos[0] = [offset, 0.0, 0.0]
+    body_b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "part_b")
+    d.mocap_pos[m.body_mocapid[body_b]] = [offset, 0.0, 0.0]
     d.qpos[z] = top + 2e-5
     d.ctrl[press_id] = -force
     contacts = []
