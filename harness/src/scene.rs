@@ -1533,8 +1533,12 @@ fn write_whole(path: &Path, bytes: &[u8]) -> Result<()> {
 /// # Errors
 /// When the task has no `[geometry]`.
 pub fn scene_is_current(task: &Task) -> Result<bool> {
-    let want = SceneSpec::of_task(task)?.mjcf();
-    Ok(std::fs::read_to_string(scene_path(task)).is_ok_and(|have| have == want))
+    Ok(scene_file_is(task, &SceneSpec::of_task(task)?))
+}
+
+/// Whether a task's scene file holds the scene `spec` describes.
+pub fn scene_file_is(task: &Task, spec: &SceneSpec) -> bool {
+    std::fs::read_to_string(scene_path(task)).is_ok_and(|have| have == spec.mjcf())
 }
 
 /// The tasks whose `task.toml` has a `[geometry]` table (those that get a scene).

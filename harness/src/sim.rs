@@ -27,7 +27,8 @@ use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 
 use crate::error::{HarnessError, Result};
 use crate::scene::{
-    APPROACH_CLEARANCE, SceneSpec, WRIST_JOINTS, scene_path, write_scene, write_scene_of,
+    APPROACH_CLEARANCE, SceneSpec, WRIST_JOINTS, scene_file_is, scene_path, write_scene,
+    write_scene_of,
 };
 use crate::world::{Contact, Slid, World, foot, lean};
 
@@ -203,8 +204,7 @@ impl Sim {
     pub fn of_task(task: &Task) -> Result<Self> {
         let spec = SceneSpec::of_task(task)?;
         let path = scene_path(task);
-        let current = std::fs::read_to_string(&path).is_ok_and(|have| have == spec.mjcf());
-        if !current {
+        if !scene_file_is(task, &spec) {
             if task.geometry().is_err() {
                 write_scene_of(task, &spec)?;
             } else if path.is_file() {
